@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Runs every test of the project on this machine, installing what it needs.
+# This is the README's test command; .ci/run calls it and nothing else.
+#
+#   deploy/test.sh              set up, build (release, warnings as errors), run all tests
+#   deploy/test.sh -R PATTERN   only the ctest tests matching PATTERN
+#
+# Every DDS participant in the tests uses deploy/cyclonedds/loopback.xml
+# (interface lo, no multicast): no test traffic leaves the machine.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+deploy/setup.sh
+
+export CYCLONEDDS_URI="file://$PWD/deploy/cyclonedds/loopback.xml"
+start=$(date +%s)
+
+echo "== configure and build (release, -Werror)"
+cmake --preset release -DSMC_WERROR=ON >/dev/null
+cmake --build --preset release
+
+echo "== tests"
+ctest --preset release "$@"
+
+echo "== all tests done in $(( $(date +%s) - start )) s"
