@@ -1,0 +1,183 @@
+#pragma once
+// The edge core: one tick per force sample. Reads the drive, runs the
+// modules at their periods, evaluates the state and operation supervisors,
+// commands the feed, and hands telemetry and events to whoever drains its
+// rings (the comms thread, or the virtual-time runner).
+//
+// Real-time contract: tick() and set_operator_inputs() never allocate, lock,
+// log, throw or call DDS. Everything else runs before the loop.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "smc/edge/drive.hpp"
+#include "smc/edge/module.hpp"
+#include "smc/edge/parameters.hpp"
+#include "smc/edge/program.hpp"
+#include "smc/edge/rt/spsc_ring.hpp"
+#include "smc/edge/signals.hpp"
+#include "smc/edge/supervisor.hpp"
+
+namespace smc::config {
+class SupervisorConfig;
+}
+
+namespace smc::edge {
+
+class ChatterSuppressor;
+
+// Everything the core needs, validated, built off the loop.
+struct EdgeConfig {
+  std::string config_id;
+  int variant = 0;                 // smc.config.SmcVariant
+  EdgeParameters params;
+  FixedProgram program;
+  ModuleMask modules = 0;          // modules in use
+  std::string grafcet_name;
+  std::string grafcet_text;
+};
+
+// Reads and checks a supervisor configuration: parameters, module set, part
+// program (depths, feeds and speeds within the machine's limits) and the
+// Grafcet (parsed and verified). Throws ConfigError naming the field.
+EdgeConfig edge_config_from_proto(const smc::config::SupervisorConfig& cfg);
+
+enum class EventKind : uint8_t {
+  kSituationChanged,
+  kChatterDetected,    // automatic (E)
+  kChatterSignalled,   // operator (D)
+  kProgramRewritten,   // F added a pass
+  kFault,              // the core put the machine in feed hold
+  kFaultCleared,
+  kPassStarted,
+  kPassCompleted,
+  kProgramDone,
+};
+const char* to_string(EventKind k) noexcept;
+
+struct EdgeEvent {
+  EventKind kind = EventKind::kSituationChanged;
+  double t_s = 0;
+  Fault fault = Fault::kNone;
+  int8_t module = -1;            // ModuleId for kModuleError, else -1
+  uint64_t active_steps = 0;
+  ModuleMask active = 0;
+  uint32_t inputs = 0;
+  int16_t pass_index = 0;
+  int16_t pass_count = 0;
+  double depth_mm = 0;
+  double ratio = 0;              // chatter statistic
+  double frequency_hz = 0;       // chatter frequency
+  double value = 0;              // the offending sample for a force fault
+};
+
+// One record per spindle revolution (module I's period).
+struct RevolutionRecord {
+  double t_s = 0;
+  uint32_t revolution = 0;
+  double f_y_peak_n = 0;
+  double f_ref_n = 0;
+  double feedrate_mm_s = 0;
+  double feed_per_tooth_mm = 0;
+  double depth_mm = 0;
+  double spindle_rpm = 0;
+  double power_peak_w = 0;        // highest instantaneous spindle power in the revolution
+  double power_mean_w = 0;        // spindle power averaged over the revolution
+  double x_mm = 0;
+  double chatter_ratio = 0;
+  double gain_estimate = 0;
+  double engagement_min = 0;       // lowest engagement during the revolution (NaN: unknown)
+  int16_t pass_index = 0;
+  int16_t pass_count = 0;
+  bool contact = false;
+  bool chatter = false;
+  bool fault_hold = false;
+  ModuleMask active = 0;
+  uint64_t active_steps = 0;
+};
+
+// Raw force of one revolution, decimated.
+struct ForceBatchRecord {
+  static constexpr int kMax = 128;
+  double first_t_s = 0;
+  double period_s = 0;
+  uint16_t count = 0;
+  std::array<float, kMax> f_y{};
+  std::array<float, kMax> f_z{};
+};
+
+class EdgeCore {
+ public:
+  // Not real-time. Builds modules and supervisors from a validated config.
+  EdgeCore(EdgeConfig config, Drive& drive);
+  ~EdgeCore();
+  EdgeCore(const EdgeCore&) = delete;
+  EdgeCore& operator=(const EdgeCore&) = delete;
+
+  // Not real-time: load the program into the drive, reset every module and
+  // the supervisors. Call before the first tick.
+  void start();
+  // Real-time: one sample period. `overrun`: the loop missed its deadline.
+  void tick(bool overrun = false) noexcept;
+  // Real-time: the latest operator inputs (the comms side delivers them).
+  void set_operator_inputs(const OperatorInputs& in) noexcept { pending_inputs_ = in; }
+  // Raw-force decimation for ForceBatchRecord (1 = every sample).
+  void set_batch_decimation(int d) noexcept { decimation_ = d < 1 ? 1 : d; }
+
+  const Signals& signals() const noexcept { return s_; }
+  const Situation& situation() const noexcept { return situation_; }
+  const DriveSample& drive_sample() const noexcept { return drive_sample_; }
+  const FixedProgram& program() const noexcept { return program_; }
+  const EdgeConfig& config() const noexcept { return config_; }
+  const OperationSupervisor& supervisor() const noexcept { return *supervisor_; }
+  Fault fault() const noexcept { return fault_; }
+  bool fault_hold() const noexcept { return fault_hold_; }
+  bool done() const noexcept { return drive_sample_.program_done; }
+  uint64_t ticks() const noexcept { return ticks_; }
+  uint32_t chatter_events() const noexcept { return chatter_events_; }
+  uint64_t dropped_events() const noexcept { return events_.dropped(); }
+
+  rt::SpscRing<EdgeEvent, 1024>& events() noexcept { return events_; }
+  rt::SpscRing<RevolutionRecord, 256>& revolutions() noexcept { return revolutions_; }
+  rt::SpscRing<ForceBatchRecord, 16>& batches() noexcept { return batches_; }
+
+ private:
+  void raise_fault(Fault f, int module, double value) noexcept;
+  void run_module(ModuleId id, bool sample_hook) noexcept;
+  void apply_situation() noexcept;
+  void emit(EventKind kind) noexcept;
+  EdgeEvent make_event(EventKind kind) const noexcept;
+
+  EdgeConfig config_;
+  Drive& drive_;
+  std::array<std::unique_ptr<Module>, kModuleCount> modules_;
+  ChatterSuppressor* suppressor_ = nullptr;
+  std::unique_ptr<OperationSupervisor> supervisor_;
+  FixedProgram program_;
+  int current_pass_ = 0;
+  Signals s_;
+  Situation situation_;
+  DriveSample drive_sample_;
+  OperatorInputs pending_inputs_;
+  Fault fault_ = Fault::kNone;
+  bool fault_hold_ = false;
+  uint32_t fault_releases_ = 0;
+  uint64_t ticks_ = 0;
+  uint32_t chatter_events_ = 0;
+  double power_peak_w_ = 0;
+  double power_sum_w_ = 0;
+  int power_samples_ = 0;
+  double engagement_min_ = 1;
+  int last_pass_ = -1;
+  bool last_in_pass_ = false;
+  bool last_done_ = false;
+  int decimation_ = 1;
+  ForceBatchRecord batch_;
+  rt::SpscRing<EdgeEvent, 1024> events_;
+  rt::SpscRing<RevolutionRecord, 256> revolutions_;
+  rt::SpscRing<ForceBatchRecord, 16> batches_;
+};
+
+}  // namespace smc::edge

@@ -1,0 +1,242 @@
+#pragma once
+// The machining modules of the paper's Table 1. Each is a plain object stepped
+// by the edge core; see module.hpp for the real-time contract.
+
+#include <complex>
+#include <memory>
+#include <vector>
+
+#include "smc/edge/module.hpp"
+#include "smc/edge/program.hpp"
+
+namespace smc::edge {
+
+// A: programmed feedrate; zero under a feed hold (C) or the suppression
+// routine's hold (G); the active force controller's feed otherwise. Always
+// clamped to the machine's max feedrate and the operation's max feed/tooth.
+class FeedrateRoutine final : public Module {
+ public:
+  FeedrateRoutine() noexcept : Module(ModuleId::A) {}
+  Period period() const noexcept override { return Period::kFast; }
+  void configure(const EdgeParameters& p) override;
+  void reset() noexcept override {}
+  Status update(Signals& s) noexcept override;
+
+ private:
+  EdgeParameters p_;
+};
+
+// B: has the operator requested a feed hold (a) or signalled chatter?
+class OperatorInputMonitor final : public Module {
+ public:
+  OperatorInputMonitor() noexcept : Module(ModuleId::B) {}
+  Period period() const noexcept override { return Period::kFast; }
+  void configure(const EdgeParameters&) override {}
+  void reset() noexcept override { seen_chatter_signals_ = 0; primed_ = false; }
+  Status update(Signals& s) noexcept override;
+
+ private:
+  uint32_t seen_chatter_signals_ = 0;
+  bool primed_ = false;
+};
+
+// C: hold the axes at a constant position. Its activity is the hold; the
+// feedrate routine reads it.
+class FeedHold final : public Module {
+ public:
+  FeedHold() noexcept : Module(ModuleId::C) {}
+  Period period() const noexcept override { return Period::kEvent; }
+  void configure(const EdgeParameters&) override {}
+  void reset() noexcept override {}
+  Status update(Signals&) noexcept override { return Status::kOk; }
+};
+
+// D: chatter signalled from the operator's keyboard (c), for one fast period.
+class OperatorChatterDetector final : public Module {
+ public:
+  OperatorChatterDetector() noexcept : Module(ModuleId::D) {}
+  Period period() const noexcept override { return Period::kFast; }
+  void configure(const EdgeParameters&) override {}
+  void reset() noexcept override {}
+  void clear_outputs(Signals& s) noexcept override { s.chatter_signalled = false; }
+  Status update(Signals& s) noexcept override;
+};
+
+// E: automatic chatter detector. Collects the F_z samples of one spindle
+// revolution and computes their spectrum (Eigen's FFT). Chatter energy is the
+// energy in the search band outside a guard band around each tooth-passing
+// harmonic; the statistic is its share of the total AC energy. d is set when
+// the statistic exceeds the threshold for `chatter_confirm_revolutions`
+// consecutive revolutions and stays set until reset.
+class AutomaticChatterDetector final : public Module {
+ public:
+  AutomaticChatterDetector();
+  ~AutomaticChatterDetector() override;
+  Period period() const noexcept override { return Period::kRevolution; }
+  void configure(const EdgeParameters& p) override;
+  void reset() noexcept override;
+  void clear_outputs(Signals& s) noexcept override {
+    s.chatter_detected = false;
+    s.chatter_ratio = 0;
+    s.chatter_frequency_hz = 0;
+  }
+  Status on_sample(Signals& s) noexcept override;
+  Status update(Signals& s) noexcept override;
+
+  // The statistic for one revolution of samples (also used by tests and the
+  // detector study). Real-time safe after configure().
+  double statistic(double spindle_rpm, double* frequency_hz) noexcept;
+
+ private:
+  struct Fft;
+  EdgeParameters p_;
+  std::unique_ptr<Fft> fft_;
+  std::vector<double> buffer_;
+  std::vector<std::complex<double>> spectrum_;
+  int filled_ = 0;
+  int above_ = 0;
+};
+
+// G: chatter suppression routine: run F (the core rewrites the program),
+// then hold the feed for `suppression_hold_s`; then e.
+class ChatterSuppressionRoutine final : public Module {
+ public:
+  ChatterSuppressionRoutine() noexcept : Module(ModuleId::G) {}
+  Period period() const noexcept override { return Period::kFast; }
+  void configure(const EdgeParameters& p) override { p_ = p; }
+  void reset() noexcept override { started_ = false; elapsed_fast_ = 0; }
+  void clear_outputs(Signals& s) noexcept override {
+    s.rewrite_requested = false;
+    s.suppression_hold = false;
+    s.suppression_done = false;
+  }
+  Status update(Signals& s) noexcept override;
+
+ private:
+  EdgeParameters p_;
+  bool started_ = false;
+  int elapsed_fast_ = 0;
+};
+
+// H: recursive least squares with exponential forgetting of the feed-force
+// process gain theta = K d^beta in F_Y = theta f^alpha (alpha a parameter).
+class ParameterEstimator final : public Module {
+ public:
+  ParameterEstimator() noexcept : Module(ModuleId::H) {}
+  Period period() const noexcept override { return Period::kRevolution; }
+  void configure(const EdgeParameters& p) override;
+  void reset() noexcept override;
+  void clear_outputs(Signals& s) noexcept override { s.gain_valid = false; }
+  Status update(Signals& s) noexcept override;
+
+ private:
+  EdgeParameters p_;
+  double theta_ = 0;
+  double covariance_ = 0;
+  bool initialised_ = false;
+};
+
+// I: F_Y = max |F_y| over one spindle revolution.
+class ForceSignalProcessor final : public Module {
+ public:
+  ForceSignalProcessor() noexcept : Module(ModuleId::I) {}
+  Period period() const noexcept override { return Period::kRevolution; }
+  void configure(const EdgeParameters&) override {}
+  void reset() noexcept override { peak_ = 0; }
+  Status on_sample(Signals& s) noexcept override;
+  Status update(Signals& s) noexcept override;
+
+ private:
+  double peak_ = 0;
+};
+
+// J: contact when F_Y exceeds the threshold (50 N).
+class ContactMonitor final : public Module {
+ public:
+  ContactMonitor() noexcept : Module(ModuleId::J) {}
+  Period period() const noexcept override { return Period::kRevolution; }
+  void configure(const EdgeParameters& p) override { threshold_ = p.contact_threshold_n; }
+  void reset() noexcept override {}
+  Status update(Signals& s) noexcept override;
+
+ private:
+  double threshold_ = 0;
+};
+
+// Shared by K and L: the integral law in u = f^alpha that gives
+// F(k+1) = p F(k) + (1 - p) F_ref for a process F = G u with p = exp(-T/tau):
+//   u(k) = u(k-1) + (1 - p) (F_ref - F(k)) / G,
+// clamped to the feed limits (the clamp is the anti-windup: the integrator
+// state is u itself).
+class ForceLaw {
+ public:
+  void configure(double alpha, double min_fpt, double max_fpt, double time_constant_s,
+                 double period_s) noexcept;
+  void start(double feed_per_tooth_mm) noexcept;
+  // One step; returns the new feed per tooth. gain in N / (mm/tooth)^alpha.
+  double step(double force_n, double reference_n, double gain, double max_fpt_now) noexcept;
+  double feed_per_tooth() const noexcept;
+  double pole() const noexcept { return pole_; }
+
+ private:
+  double alpha_ = 1, u_ = 0, u_min_ = 0, u_max_ = 0, pole_ = 0;
+};
+
+// K: adaptive force controller: the law above with H's gain estimate.
+class AdaptiveForceController final : public Module {
+ public:
+  AdaptiveForceController() noexcept : Module(ModuleId::K) {}
+  Period period() const noexcept override { return Period::kRevolution; }
+  void configure(const EdgeParameters& p) override;
+  void reset() noexcept override;
+  void clear_outputs(Signals& s) noexcept override { s.controller_valid = false; }
+  Status update(Signals& s) noexcept override;
+
+ private:
+  EdgeParameters p_;
+  ForceLaw law_;
+  bool started_ = false;
+};
+
+// L: model-based force controller (eq. 1): the law above with G = K d^beta
+// from the force-process model, started at the model's feed for F_ref.
+class ModelBasedForceController final : public Module {
+ public:
+  ModelBasedForceController() noexcept : Module(ModuleId::L) {}
+  Period period() const noexcept override { return Period::kRevolution; }
+  void configure(const EdgeParameters& p) override;
+  void reset() noexcept override;
+  void clear_outputs(Signals& s) noexcept override { s.controller_valid = false; }
+  Status update(Signals& s) noexcept override;
+
+ private:
+  EdgeParameters p_;
+  ForceLaw law_;
+  bool started_ = false;
+};
+
+// F: chatter suppressor. When G asks (rewrite_requested), rewrites the
+// remaining part program to one more pass of equal depths (add_one_pass in
+// program.hpp) and reports it; the core hands the new program to the drive.
+class ChatterSuppressor final : public Module {
+ public:
+  ChatterSuppressor() noexcept : Module(ModuleId::F) {}
+  Period period() const noexcept override { return Period::kEvent; }
+  void configure(const EdgeParameters&) override {}
+  void reset() noexcept override {}
+  // The program the core executes and the index of the pass in progress.
+  void bind(FixedProgram* program, const int* current_pass) noexcept {
+    program_ = program;
+    current_pass_ = current_pass;
+  }
+  Status update(Signals& s) noexcept override;
+
+ private:
+  FixedProgram* program_ = nullptr;
+  const int* current_pass_ = nullptr;
+};
+
+// One of each, indexed by ModuleId.
+std::unique_ptr<Module> make_module(ModuleId id);
+
+}  // namespace smc::edge

@@ -1,0 +1,80 @@
+#pragma once
+// Virtual-time runs of the edge core (smc-edge simulate, tests, benchmarks):
+// the same core and modules as on the machine, stepped by a virtual clock as
+// fast as the CPU allows. Deterministic.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "smc/edge/core.hpp"
+
+namespace smc::config {
+class RunSummary;
+}
+
+namespace smc::edge {
+
+// An operator action at a machine time.
+struct ScheduledInput {
+  enum Kind { kFeedHoldOn, kFeedHoldOff, kChatterSignal } kind;
+  double t_s;
+};
+
+struct RunOptions {
+  double max_time_s = 600;              // stop even if the program is not done
+  std::vector<ScheduledInput> inputs;   // sorted or not; applied in time order
+  // Called after every tick (tests use it to check invariants at each step).
+  std::function<void(const EdgeCore&)> on_tick;
+  bool keep_samples = true;             // keep the per-sample trace
+  int sample_decimation = 1;            // keep every n-th sample
+};
+
+// One kept sample of the trace.
+struct TraceSample {
+  double t_s;
+  double x_mm;
+  double f_y_n;
+  double f_z_n;
+  double f_y_peak_n;
+  double f_ref_n;
+  double feedrate_mm_s;
+  double depth_mm;
+  double power_w;
+  double vibration_y_mm;
+  double engagement;
+  int16_t pass_index;
+  bool in_pass;
+  bool contact;
+  ModuleMask active;
+  uint64_t steps;
+};
+
+struct RunResult {
+  std::vector<TraceSample> samples;
+  std::vector<RevolutionRecord> revolutions;
+  std::vector<EdgeEvent> events;
+  double end_time_s = 0;
+  bool completed = false;
+  uint64_t ticks = 0;
+};
+
+// Runs `core` (already start()ed) until its program is done or max_time_s.
+RunResult run_virtual(EdgeCore& core, const RunOptions& options);
+
+// Figures of merit of a run (what summary.json holds).
+smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run);
+
+// Writes samples.csv, revolutions.csv, events.csv, summary.json and the plots
+// (force.svg: F_Y with F_ref, pass boundaries, feed-hold and chatter marks;
+// feed.svg; raw.svg) into `dir` (created if needed). Throws on I/O errors
+// naming the file.
+void write_outputs(const std::string& dir, const EdgeCore& core, const RunResult& run,
+                   const smc::config::RunSummary& summary);
+
+// Parses "T:DURATION" (seconds) as a feed hold from T to T+DURATION.
+// Throws std::invalid_argument naming the flag and the expected form.
+std::vector<ScheduledInput> parse_feed_hold(const std::string& spec);
+
+}  // namespace smc::edge

@@ -1,0 +1,48 @@
+#pragma once
+// The simulated mill: a Drive that machines a part in the time-domain model
+// of services/machining (forces A1–A5 and the axial force, structural modes,
+// regenerative chip), with the part's surface tracked along the feed so that
+// contact starts and ends where the cutter meets and leaves material, the
+// program's passes executed in turn (rapid repositioning in air between
+// them), feed and feed hold applied, and the force sensor modelled (anti-alias
+// low-pass per channel, white noise with a fixed seed).
+//
+// Real-time contract: step() and rewrite() do not allocate, lock, log or
+// throw (the simulator's buffers are sized at construction for
+// min_spindle_rpm). Deterministic for a given seed.
+
+#include <memory>
+#include <vector>
+
+#include "smc/edge/drive.hpp"
+
+namespace smc::config {
+class MillingModel;
+class SimulatedMill;
+}  // namespace smc::config
+
+namespace smc::edge {
+
+class SimulatedMill final : public Drive {
+ public:
+  // Not real-time. Throws ConfigError naming the field for a bad model.
+  SimulatedMill(const smc::config::MillingModel& model, const smc::config::SimulatedMill& sim,
+                double sample_period_s);
+  ~SimulatedMill() override;
+
+  void load(const FixedProgram& program) override;
+  Status step(double feedrate_cmd_mm_s, DriveSample& out) noexcept override;
+  Status rewrite(const FixedProgram& program, int from) noexcept override;
+  double sample_period_s() const noexcept override { return period_s_; }
+
+  // Depth of material still above the final surface at x (mm), for tests.
+  double remaining_depth_at(double x_mm) const noexcept;
+  double part_length_mm() const noexcept;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  double period_s_;
+};
+
+}  // namespace smc::edge

@@ -1,0 +1,152 @@
+// smc-edge simulate / check: offline runs of the edge on the simulated mill.
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "commands.hpp"
+#include "smc/documents/load.hpp"
+#include "smc/edge/core.hpp"
+#include "smc/edge/replay_drive.hpp"
+#include "smc/edge/runner.hpp"
+#include "smc/edge/sim_mill.hpp"
+#include "smc_config.pb.h"
+
+namespace smc::edge::cli {
+
+namespace {
+
+struct SimulateArgs {
+  std::string config;
+  std::string out = "out/simulate";
+  std::vector<std::string> feed_holds;
+  std::vector<double> chatter_at;
+  std::string replay;
+  double max_time_s = 600;
+  bool quiet = false;
+};
+
+EdgeConfig load_config(const std::string& path, smc::config::SupervisorConfig& raw) {
+  try {
+    raw = smc::documents::load_supervisor_config(path);
+    return edge_config_from_proto(raw);
+  } catch (const ConfigError& e) {
+    throw Failure(2, path + ": " + e.what());
+  } catch (const smc::documents::DocumentError& e) {
+    throw Failure(2, e.what());
+  }
+}
+
+void print_summary(const smc::config::RunSummary& s, const std::string& out) {
+  std::printf("%s: %s in %.2f s of machine time, %u of %u planned passes (%u rewrite%s)\n",
+              s.config_id().c_str(), s.completed() ? "completed" : "NOT completed",
+              s.cycle_time_s(), s.passes_completed(), s.passes_planned(), s.program_rewrites(),
+              s.program_rewrites() == 1 ? "" : "s");
+  std::printf("  F_ref %.1f N; peak F_Y %.1f N (%+.0f %% of F_ref); peak spindle power %.0f W "
+              "(%+.0f %% of the limit)\n",
+              s.force_reference_n(), s.peak_force_n(), s.peak_force_violation_pct(),
+              s.peak_power_w(), s.peak_power_violation_pct());
+  std::printf("  overshoot %.1f %%; steady-state error %.1f %%; chatter events %u",
+              s.overshoot_pct(), s.steady_state_error_pct(), s.chatter_events());
+  if (s.chatter_onset_s() >= 0) std::printf("; onset %.2f s", s.chatter_onset_s());
+  if (s.chatter_detected_s() >= 0) std::printf("; detected %.2f s", s.chatter_detected_s());
+  if (s.detection_delay_s() >= 0) std::printf(" (%.0f ms after onset)", 1000 * s.detection_delay_s());
+  std::printf("\n");
+  for (const auto& f : s.faults()) std::printf("  fault: %s\n", f.c_str());
+  std::printf("  wrote %s/{samples.csv,revolutions.csv,events.csv,summary.json,force.svg,"
+              "feed.svg,raw.svg}\n",
+              out.c_str());
+}
+
+}  // namespace
+
+void add_simulate(CLI::App& app) {
+  auto args = std::make_shared<SimulateArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "simulate",
+      "Run one part program in virtual time on the simulated mill (or a recorded force file)\n"
+      "and write per-sample and per-revolution CSV, a JSON summary and SVG plots.");
+  sub->add_option("--config", args->config,
+                  "Supervisor configuration (textproto or JSON), e.g.\n"
+                  "edge/configs/smc2.textproto")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sub->add_option("--out", args->out, "Output folder (created)")->capture_default_str();
+  sub->add_option("--feed-hold-at", args->feed_holds,
+                  "Operator feed hold T:DURATION in seconds of machine time (repeatable)");
+  sub->add_option("--chatter-at", args->chatter_at,
+                  "Operator chatter signal at T seconds (repeatable)");
+  sub->add_option("--replay", args->replay,
+                  "Play recorded force from this CSV instead of simulating the mill")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--max-time", args->max_time_s, "Stop after this many seconds")
+      ->capture_default_str();
+  sub->add_flag("--quiet", args->quiet, "Print nothing but errors");
+  sub->callback([args] {
+    smc::config::SupervisorConfig raw;
+    EdgeConfig cfg = load_config(args->config, raw);
+    RunOptions opts;
+    opts.max_time_s = args->max_time_s;
+    for (const auto& spec : args->feed_holds) {
+      try {
+        for (const auto& in : parse_feed_hold(spec)) opts.inputs.push_back(in);
+      } catch (const std::invalid_argument& e) {
+        throw Failure(2, e.what());
+      }
+    }
+    for (double t : args->chatter_at) opts.inputs.push_back({ScheduledInput::kChatterSignal, t});
+    std::unique_ptr<Drive> drive;
+    try {
+      if (!args->replay.empty()) {
+        drive = std::make_unique<ReplayDrive>(args->replay, cfg.params.sample_period_s);
+      } else {
+        drive = std::make_unique<SimulatedMill>(raw.milling_model(), raw.simulation(),
+                                                cfg.params.sample_period_s);
+      }
+    } catch (const ConfigError& e) {
+      throw Failure(2, args->config + ": " + e.what());
+    } catch (const std::runtime_error& e) {
+      throw Failure(2, e.what());
+    }
+    EdgeCore core(cfg, *drive);
+    core.start();
+    const auto t0 = std::chrono::steady_clock::now();
+    double next_report = 5.0;
+    opts.on_tick = [&](const EdgeCore& c) {
+      const double t = c.drive_sample().force.t_s;
+      if (!args->quiet && t >= next_report) {
+        std::fprintf(stderr, "\r  t = %5.1f s, pass %d of %d ...", t,
+                     c.drive_sample().pass_index + 1, c.program().count);
+        next_report += 5.0;
+      }
+    };
+    RunResult run = run_virtual(core, opts);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!args->quiet) std::fprintf(stderr, "\r%60s\r", "");
+    const auto summary = summarize(core, run);
+    write_outputs(args->out, core, run, summary);
+    if (!args->quiet) {
+      print_summary(summary, args->out);
+      std::printf("  %.1f s of machine time in %.2f s (%.0fx real time)\n", run.end_time_s, wall,
+                  run.end_time_s / std::max(wall, 1e-9));
+    }
+    if (!run.completed) throw Failure(3, "the program did not complete within --max-time");
+  });
+}
+
+void add_check(CLI::App& app) {
+  auto path = std::make_shared<std::string>();
+  CLI::App* sub = app.add_subcommand(
+      "check", "Validate a supervisor configuration (parameters, program, Grafcet) and exit");
+  sub->add_option("CONFIG", *path, "textproto or JSON")->required()->check(CLI::ExistingFile);
+  sub->callback([path] {
+    smc::config::SupervisorConfig raw;
+    const EdgeConfig cfg = load_config(*path, raw);
+    std::printf("%s: ok (%s, %d pass%s, Grafcet %s)\n", path->c_str(), cfg.config_id.c_str(),
+                cfg.program.count, cfg.program.count == 1 ? "" : "es", cfg.grafcet_name.c_str());
+  });
+}
+
+}  // namespace smc::edge::cli

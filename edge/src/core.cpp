@@ -1,0 +1,308 @@
+#include "smc/edge/core.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "smc/edge/modules.hpp"
+
+namespace smc::edge {
+
+namespace {
+
+constexpr ModuleId kSampleModules[] = {ModuleId::I, ModuleId::E};
+constexpr ModuleId kRevolutionModules[] = {ModuleId::I, ModuleId::J, ModuleId::E,
+                                           ModuleId::H, ModuleId::K, ModuleId::L};
+constexpr ModuleId kFastModules[] = {ModuleId::B, ModuleId::D, ModuleId::G};
+
+bool is_active(ModuleMask mask, ModuleId id) noexcept { return (mask & bit(id)) != 0; }
+
+}  // namespace
+
+const char* to_string(Fault f) noexcept {
+  switch (f) {
+    case Fault::kNone:
+      return "none";
+    case Fault::kNonFiniteForce:
+      return "non-finite force sample";
+    case Fault::kSaturatedForce:
+      return "saturated force sample";
+    case Fault::kModuleError:
+      return "module error";
+    case Fault::kOverrun:
+      return "real-time loop overrun";
+    case Fault::kSupervisorError:
+      return "operation supervisor reached no stable situation";
+    case Fault::kDriveError:
+      return "drive error";
+  }
+  return "unknown";
+}
+
+const char* to_string(EventKind k) noexcept {
+  switch (k) {
+    case EventKind::kSituationChanged:
+      return "situation";
+    case EventKind::kChatterDetected:
+      return "chatter_detected";
+    case EventKind::kChatterSignalled:
+      return "chatter_signalled";
+    case EventKind::kProgramRewritten:
+      return "program_rewritten";
+    case EventKind::kFault:
+      return "fault";
+    case EventKind::kFaultCleared:
+      return "fault_cleared";
+    case EventKind::kPassStarted:
+      return "pass_started";
+    case EventKind::kPassCompleted:
+      return "pass_completed";
+    case EventKind::kProgramDone:
+      return "program_done";
+  }
+  return "unknown";
+}
+
+EdgeCore::EdgeCore(EdgeConfig config, Drive& drive)
+    : config_(std::move(config)), drive_(drive), program_(config_.program) {
+  for (int i = 0; i < kModuleCount; ++i) {
+    const auto id = static_cast<ModuleId>(i);
+    modules_[static_cast<size_t>(i)] = make_module(id);
+    if ((config_.modules & bit(id)) != 0) modules_[static_cast<size_t>(i)]->configure(config_.params);
+  }
+  suppressor_ = static_cast<ChatterSuppressor*>(modules_[static_cast<size_t>(ModuleId::F)].get());
+  suppressor_->bind(&program_, &current_pass_);
+  supervisor_ = std::make_unique<OperationSupervisor>(config_.grafcet_text, config_.grafcet_name,
+                                                      config_.modules);
+}
+
+EdgeCore::~EdgeCore() = default;
+
+void EdgeCore::start() {
+  program_ = config_.program;
+  current_pass_ = 0;
+  drive_.load(program_);
+  s_ = Signals{};
+  for (auto& m : modules_) {
+    m->reset();
+    m->clear_outputs(s_);
+  }
+  supervisor_->reset();
+  situation_ = Situation{};
+  drive_sample_ = DriveSample{};
+  fault_ = Fault::kNone;
+  fault_hold_ = false;
+  ticks_ = 0;
+  chatter_events_ = 0;
+  power_peak_w_ = 0;
+  power_sum_w_ = 0;
+  power_samples_ = 0;
+  engagement_min_ = 1;
+  last_pass_ = -1;
+  last_in_pass_ = false;
+  last_done_ = false;
+  batch_ = ForceBatchRecord{};
+}
+
+EdgeEvent EdgeCore::make_event(EventKind kind) const noexcept {
+  EdgeEvent e;
+  e.kind = kind;
+  e.t_s = drive_sample_.force.t_s;
+  e.active_steps = situation_.active_steps;
+  e.active = s_.active;
+  e.inputs = situation_.inputs;
+  e.pass_index = static_cast<int16_t>(drive_sample_.pass_index);
+  e.pass_count = static_cast<int16_t>(program_.count);
+  e.depth_mm = drive_sample_.depth_mm;
+  return e;
+}
+
+void EdgeCore::emit(EventKind kind) noexcept { events_.try_push(make_event(kind)); }
+
+void EdgeCore::raise_fault(Fault f, int module, double value) noexcept {
+  if (fault_hold_) return;  // the first cause is the one reported
+  fault_ = f;
+  fault_hold_ = true;
+  fault_releases_ = pending_inputs_.releases;
+  EdgeEvent e = make_event(EventKind::kFault);
+  e.fault = f;
+  e.module = static_cast<int8_t>(module);
+  e.value = value;
+  events_.try_push(e);
+}
+
+void EdgeCore::run_module(ModuleId id, bool sample_hook) noexcept {
+  Module& m = *modules_[static_cast<size_t>(id)];
+  const Status st = sample_hook ? m.on_sample(s_) : m.update(s_);
+  if (st != Status::kOk) raise_fault(Fault::kModuleError, static_cast<int>(id), 0);
+}
+
+void EdgeCore::apply_situation() noexcept {
+  const ModuleMask before = s_.active;
+  const ModuleMask after = static_cast<ModuleMask>(situation_.active & config_.modules);
+  // Impulse actions reset modules; a routine that becomes active starts afresh.
+  ModuleMask resets = static_cast<ModuleMask>(situation_.impulses & config_.modules);
+  resets = static_cast<ModuleMask>(resets | (after & ~before & bit(ModuleId::G)));
+  for (int i = 0; i < kModuleCount; ++i) {
+    if ((resets & (1u << i)) == 0) continue;
+    modules_[static_cast<size_t>(i)]->reset();
+    modules_[static_cast<size_t>(i)]->clear_outputs(s_);
+  }
+  s_.active = after;
+}
+
+void EdgeCore::tick(bool overrun) noexcept {
+  ++ticks_;
+  const EdgeParameters& p = config_.params;
+  s_.operator_inputs = pending_inputs_;
+  s_.f_y_updated = false;
+  s_.program_rewritten = false;
+
+  // 1. The machine: apply the last feed command, read the sample.
+  if (drive_.step(s_.feedrate_cmd_mm_s, drive_sample_) != Status::kOk) {
+    raise_fault(Fault::kDriveError, -1, 0);
+  }
+  current_pass_ = drive_sample_.pass_index;
+  s_.spindle_rpm = drive_sample_.spindle_rpm;
+  s_.depth_mm = drive_sample_.depth_mm;
+  s_.programmed_feedrate_mm_s = drive_sample_.programmed_feedrate_mm_s;
+  s_.in_pass = drive_sample_.in_pass;
+  s_.force_reference_n = p.force_reference_at(s_.spindle_rpm);
+  power_peak_w_ = std::max(power_peak_w_, drive_sample_.spindle_power_w);
+  power_sum_w_ += drive_sample_.spindle_power_w;
+  ++power_samples_;
+  engagement_min_ = std::isnan(drive_sample_.engagement)
+                        ? drive_sample_.engagement
+                        : std::min(engagement_min_, drive_sample_.engagement);
+
+  // 2. A bad sample never reaches the modules; it holds the feed.
+  const ForceSample& f = drive_sample_.force;
+  bool sample_ok = std::isfinite(f.f_x_n) && std::isfinite(f.f_y_n) && std::isfinite(f.f_z_n);
+  if (!sample_ok) {
+    raise_fault(Fault::kNonFiniteForce, -1, std::isfinite(f.f_y_n) ? f.f_z_n : f.f_y_n);
+  } else if (std::fabs(f.f_y_n) >= p.force_sensor_range_n ||
+             std::fabs(f.f_z_n) >= p.force_sensor_range_n) {
+    sample_ok = false;
+    raise_fault(Fault::kSaturatedForce, -1,
+                std::max(std::fabs(f.f_y_n), std::fabs(f.f_z_n)));
+  }
+  if (overrun) raise_fault(Fault::kOverrun, -1, 0);
+  if (sample_ok) {
+    s_.sample = f;
+    for (ModuleId id : kSampleModules) {
+      if (is_active(s_.active, id)) run_module(id, true);
+    }
+    if (ticks_ % static_cast<uint64_t>(decimation_) == 0 && batch_.count < ForceBatchRecord::kMax) {
+      if (batch_.count == 0) {
+        batch_.first_t_s = f.t_s;
+        batch_.period_s = p.sample_period_s * decimation_;
+      }
+      batch_.f_y[batch_.count] = static_cast<float>(f.f_y_n);
+      batch_.f_z[batch_.count] = static_cast<float>(f.f_z_n);
+      ++batch_.count;
+    }
+  }
+
+  const bool revolution = ticks_ % static_cast<uint64_t>(p.samples_per_revolution) == 0;
+  const bool fast = ticks_ % static_cast<uint64_t>(p.samples_per_fast) == 0;
+  const bool chatter_before = s_.chatter_detected;
+
+  // 3. Revolution-rate modules, in data-flow order: I → J → E → H → K/L.
+  if (revolution) {
+    for (ModuleId id : kRevolutionModules) {
+      if (is_active(s_.active, id)) run_module(id, false);
+    }
+  }
+  // 4. Fast modules: B, D, G; F when G asks for it.
+  if (fast) {
+    for (ModuleId id : kFastModules) {
+      if (is_active(s_.active, id)) run_module(id, false);
+    }
+    if (s_.rewrite_requested) {
+      run_module(ModuleId::F, false);
+      if (s_.program_rewritten) {
+        if (drive_.rewrite(program_, current_pass_) != Status::kOk) {
+          raise_fault(Fault::kDriveError, -1, 0);
+        }
+        emit(EventKind::kProgramRewritten);
+      }
+    }
+  }
+
+  // 5. State supervisor → operation supervisor → module activity.
+  const uint64_t steps_before = situation_.active_steps;
+  situation_ = supervisor_->evaluate(receptivities(s_, fault_hold_));
+  if (situation_.error) raise_fault(Fault::kSupervisorError, -1, 0);
+  apply_situation();
+
+  // 6. The feedrate routine, after the supervisor so a hold acts at once.
+  if (fast && is_active(s_.active, ModuleId::A)) run_module(ModuleId::A, false);
+  if (fault_hold_) {
+    s_.feedrate_cmd_mm_s = 0;
+    s_.feed_per_tooth_cmd_mm = 0;
+  }
+
+  // 7. Events.
+  if (fault_hold_ && s_.operator_inputs.releases != fault_releases_) {
+    fault_hold_ = false;
+    emit(EventKind::kFaultCleared);
+  }
+  if (s_.chatter_detected && !chatter_before) {
+    ++chatter_events_;
+    EdgeEvent e = make_event(EventKind::kChatterDetected);
+    e.ratio = s_.chatter_ratio;
+    e.frequency_hz = s_.chatter_frequency_hz;
+    events_.try_push(e);
+  }
+  if (s_.chatter_signalled && fast) {
+    ++chatter_events_;
+    emit(EventKind::kChatterSignalled);
+  }
+  if (situation_.active_steps != steps_before) emit(EventKind::kSituationChanged);
+  if (drive_sample_.in_pass && (!last_in_pass_ || drive_sample_.pass_index != last_pass_)) {
+    emit(EventKind::kPassStarted);
+  }
+  if (!drive_sample_.in_pass && last_in_pass_) {
+    EdgeEvent e = make_event(EventKind::kPassCompleted);
+    e.pass_index = static_cast<int16_t>(last_pass_);
+    events_.try_push(e);
+  }
+  if (drive_sample_.program_done && !last_done_) emit(EventKind::kProgramDone);
+  last_in_pass_ = drive_sample_.in_pass;
+  last_pass_ = drive_sample_.pass_index;
+  last_done_ = drive_sample_.program_done;
+
+  // 8. Telemetry, once per revolution.
+  if (revolution) {
+    RevolutionRecord r;
+    r.t_s = f.t_s;
+    r.revolution = s_.revolutions;
+    r.f_y_peak_n = s_.f_y_peak_n;
+    r.f_ref_n = s_.force_reference_n;
+    r.feedrate_mm_s = s_.feedrate_cmd_mm_s;
+    r.feed_per_tooth_mm = s_.feed_per_tooth_cmd_mm;
+    r.depth_mm = s_.depth_mm;
+    r.spindle_rpm = s_.spindle_rpm;
+    r.power_peak_w = power_peak_w_;
+    r.power_mean_w = power_samples_ > 0 ? power_sum_w_ / power_samples_ : 0;
+    r.x_mm = drive_sample_.x_mm;
+    r.chatter_ratio = s_.chatter_ratio;
+    r.gain_estimate = s_.gain_estimate;
+    r.engagement_min = engagement_min_;
+    r.pass_index = static_cast<int16_t>(drive_sample_.pass_index);
+    r.pass_count = static_cast<int16_t>(program_.count);
+    r.contact = s_.contact;
+    r.chatter = s_.chatter_detected;
+    r.fault_hold = fault_hold_;
+    r.active = s_.active;
+    r.active_steps = situation_.active_steps;
+    revolutions_.try_push(r);
+    power_peak_w_ = 0;
+    power_sum_w_ = 0;
+    power_samples_ = 0;
+    engagement_min_ = 1;
+    if (batch_.count > 0) batches_.try_push(batch_);
+    batch_.count = 0;
+  }
+}
+
+}  // namespace smc::edge

@@ -1,0 +1,255 @@
+#include "smc/edge/sim_mill.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "smc/edge/parameters.hpp"
+#include "smc/machining/model_proto.hpp"
+#include "smc/machining/simulator.hpp"
+#include "smc_config.pb.h"
+
+namespace smc::edge {
+
+namespace {
+
+// Second-order Butterworth low-pass by the bilinear transform (with
+// pre-warping), run at the simulator's internal step: the anti-alias filter
+// in front of the force sensor's sampler.
+class LowPass {
+ public:
+  void configure(double cutoff_hz, double rate_hz) noexcept {
+    const double k = std::tan(std::numbers::pi * cutoff_hz / rate_hz);
+    const double q = std::numbers::sqrt2 / 2;
+    const double norm = 1.0 / (1.0 + k / q + k * k);
+    b0_ = k * k * norm;
+    b1_ = 2 * b0_;
+    b2_ = b0_;
+    a1_ = 2 * (k * k - 1) * norm;
+    a2_ = (1 - k / q + k * k) * norm;
+    reset();
+  }
+  void reset() noexcept { z1_ = z2_ = 0; }
+  double operator()(double x) noexcept {
+    const double y = b0_ * x + z1_;
+    z1_ = b1_ * x - a1_ * y + z2_;
+    z2_ = b2_ * x - a2_ * y;
+    return y;
+  }
+
+ private:
+  double b0_ = 1, b1_ = 0, b2_ = 0, a1_ = 0, a2_ = 0, z1_ = 0, z2_ = 0;
+};
+
+enum class Phase { kCutting, kRepositioning, kDone };
+
+}  // namespace
+
+struct SimulatedMill::Impl {
+  machining::MillingModel model;
+  machining::MillSimulator sim;
+  smc::config::SimulatedMill options;
+  int substeps = 1;
+  LowPass lp_x, lp_y, lp_z;
+  std::mt19937_64 rng;
+  std::normal_distribution<double> noise{0.0, 1.0};
+  // Depth already removed by earlier passes, per bin along the part (mm).
+  std::vector<double> removed;
+  double bin_mm = 0.25;
+  // Engagement: tooth-tip angles on the leading half that lie over the part's band.
+  std::vector<double> band_cos;
+  FixedProgram program;
+  int pass = 0;
+  Phase phase = Phase::kDone;
+  double reposition_left_s = 0;
+  double time_s = 0;
+  double start_x = 0;
+
+  Impl(machining::MillingModel m, const smc::config::SimulatedMill& o, double period_s)
+      : model(std::move(m)),
+        sim(model, sim_options(model, o, period_s)),
+        options(o),
+        rng(o.seed()) {}
+
+  static machining::SimulatorOptions sim_options(const machining::MillingModel& m,
+                                                 const smc::config::SimulatedMill& o,
+                                                 double period_s) {
+    // Step the simulator at its internal step so the sensor filters see the
+    // continuous force; the mill samples every `period_s`.
+    const double h = m.internal_step_s;
+    const double n = std::max(1.0, std::round(period_s / h));
+    machining::SimulatorOptions so;
+    so.sample_period_s = period_s / n;
+    so.min_spindle_rpm = o.min_spindle_rpm() > 0 ? o.min_spindle_rpm() : 100;
+    return so;
+  }
+
+  double length() const noexcept { return model.workpiece.length_mm; }
+  double radius() const noexcept { return model.cutter.radius_mm; }
+
+  double removed_at(double x) const noexcept {
+    if (x < 0 || x > length()) return 1e9;  // no material outside the part
+    const auto i = static_cast<size_t>(std::min<double>(x / bin_mm, double(removed.size() - 1)));
+    return removed[i];
+  }
+
+  // The material the current pass swept (everything behind its leading
+  // edge) now stands at the pass's target depth.
+  void commit(double tool_x) noexcept {
+    const double target = program.depth_before(pass + 1);
+    const double edge = std::min(length(), tool_x + radius());
+    for (size_t i = 0; i < removed.size(); ++i) {
+      if (static_cast<double>(i) * bin_mm <= edge) removed[i] = std::max(removed[i], target);
+    }
+  }
+
+  void begin_reposition(double from_x) noexcept {
+    phase = Phase::kRepositioning;
+    const double rapid = options.rapid_feedrate_mm_s() > 0 ? options.rapid_feedrate_mm_s() : 36;
+    reposition_left_s = std::fabs(from_x - start_x) / rapid;
+  }
+};
+
+SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
+                             const smc::config::SimulatedMill& sim, double sample_period_s)
+    : period_s_(sample_period_s) {
+  machining::MillingModel m;
+  try {
+    m = machining::from_proto(model, "milling_model");
+  } catch (const std::exception& e) {
+    throw ConfigError(e.what());
+  }
+  if (!(sample_period_s > 0)) throw ConfigError("sample_period_s: must be > 0");
+  for (double hz : {sim.f_y_cutoff_hz(), sim.f_z_cutoff_hz()}) {
+    if (hz < 0) throw ConfigError("simulation: anti-alias cut-off frequencies must be >= 0");
+  }
+  if (sim.noise_rms_n() < 0) throw ConfigError("simulation.noise_rms_n: must be >= 0");
+  impl_ = std::make_unique<Impl>(std::move(m), sim, sample_period_s);
+  Impl& s = *impl_;
+  s.substeps = static_cast<int>(std::lround(sample_period_s / s.sim.sample_period_s()));
+  const double rate = 1.0 / s.sim.sample_period_s();
+  // A cut-off of 0 (or above Nyquist) means no filter on that channel.
+  auto cfg = [&](LowPass& lp, double hz) { lp.configure(hz > 0 && hz < rate / 2 ? hz : rate * 0.45, rate); };
+  cfg(s.lp_x, sim.f_y_cutoff_hz());
+  cfg(s.lp_y, sim.f_y_cutoff_hz());
+  cfg(s.lp_z, sim.f_z_cutoff_hz());
+  s.removed.assign(static_cast<size_t>(std::ceil(s.length() / s.bin_mm)) + 1, 0.0);
+  const auto& w = s.model.workpiece;
+  const double y_lo = w.offset_mm - w.width_mm / 2, y_hi = w.offset_mm + w.width_mm / 2;
+  for (int k = 0; k < 181; ++k) {
+    const double th = -std::numbers::pi / 2 + std::numbers::pi * k / 180.0;
+    const double y = s.radius() * std::sin(th);
+    if (y >= y_lo && y <= y_hi) s.band_cos.push_back(std::cos(th));
+  }
+  s.start_x = -s.radius() - (sim.approach_mm() > 0 ? sim.approach_mm() : 5.0);
+}
+
+SimulatedMill::~SimulatedMill() = default;
+
+double SimulatedMill::part_length_mm() const noexcept { return impl_->length(); }
+
+double SimulatedMill::remaining_depth_at(double x_mm) const noexcept {
+  return impl_->program.total_depth_mm() - impl_->removed_at(x_mm);
+}
+
+void SimulatedMill::load(const FixedProgram& program) {
+  Impl& s = *impl_;
+  s.program = program;
+  s.pass = 0;
+  s.sim.reset();
+  s.sim.set_tool_position(s.start_x);
+  std::fill(s.removed.begin(), s.removed.end(), 0.0);
+  s.lp_x.reset();
+  s.lp_y.reset();
+  s.lp_z.reset();
+  s.rng.seed(s.options.seed());
+  s.time_s = 0;
+  s.phase = program.count > 0 ? Phase::kCutting : Phase::kDone;
+}
+
+Status SimulatedMill::rewrite(const FixedProgram& program, int from) noexcept {
+  Impl& s = *impl_;
+  if (from < 0 || from >= program.count) return Status::kError;
+  if (s.phase == Phase::kCutting) s.commit(s.sim.tool_position_mm());
+  const double x = s.sim.tool_position_mm();
+  s.program = program;
+  s.pass = from;
+  s.begin_reposition(x);
+  return Status::kOk;
+}
+
+Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept {
+  Impl& s = *impl_;
+  const int pass = std::min(s.pass, std::max(0, s.program.count - 1));
+  const PassSpec& spec = s.program.passes[static_cast<size_t>(pass)];
+  machining::SampleInput in;
+  in.spindle_rpm = spec.spindle_rpm;
+  const double target = s.program.depth_before(pass + 1);
+  if (s.phase == Phase::kCutting) {
+    in.feedrate_mm_s = std::max(0.0, feedrate_cmd_mm_s);
+    // The chip depth where the leading edge meets material left by earlier passes.
+    const double edge = std::min(s.length(), s.sim.tool_position_mm() + s.radius());
+    in.depth_mm = std::max(0.0, target - s.removed_at(std::max(0.0, edge)));
+  }
+  machining::Sample smp;
+  uint32_t status = 0;
+  double fx = 0, fy = 0, fz = 0;
+  for (int k = 0; k < s.substeps; ++k) {
+    status |= s.sim.step(in, smp);
+    fx = s.lp_x(smp.fx_n);
+    fy = s.lp_y(smp.fy_n);
+    fz = s.lp_z(smp.fz_n);
+  }
+  s.time_s += period_s_;
+  const double sigma = s.options.noise_rms_n();
+  if (sigma > 0) {
+    fx += sigma * s.noise(s.rng);
+    fy += sigma * s.noise(s.rng);
+    fz += sigma * s.noise(s.rng);
+  }
+  const double x = s.sim.tool_position_mm();
+  out.force = ForceSample{s.time_s, fx, fy, fz};
+  out.spindle_rpm = spec.spindle_rpm;
+  out.depth_mm = spec.depth_mm;
+  out.programmed_feedrate_mm_s = spec.feedrate_mm_s;
+  out.feedrate_mm_s = in.feedrate_mm_s;
+  out.x_mm = x;
+  out.spindle_power_w = smp.power_w;
+  out.vibration_y_mm = smp.tool_y_mm - smp.part_y_mm;
+  out.pass_index = pass;
+  out.in_pass = s.phase == Phase::kCutting;
+  out.program_done = s.phase == Phase::kDone;
+  // Engagement: the share of the band's leading arc over the part.
+  int in_cut = 0;
+  if (in.depth_mm > 0) {
+    for (double c : s.band_cos) {
+      const double tip = x + s.radius() * c;
+      if (tip >= 0 && tip <= s.length()) ++in_cut;
+    }
+  }
+  out.engagement = s.band_cos.empty() ? 0.0 : static_cast<double>(in_cut) / static_cast<double>(s.band_cos.size());
+
+  // Pass sequencing.
+  if (s.phase == Phase::kCutting && x - s.radius() > s.length()) {
+    s.commit(x);
+    if (s.pass + 1 < s.program.count) {
+      ++s.pass;
+      s.begin_reposition(x);
+    } else {
+      s.phase = Phase::kDone;
+    }
+  } else if (s.phase == Phase::kRepositioning) {
+    s.reposition_left_s -= period_s_;
+    if (s.reposition_left_s <= 0) {
+      s.sim.set_tool_position(s.start_x);
+      s.phase = Phase::kCutting;
+    }
+  }
+  const bool bad = (status & (machining::StepStatus::kInvalidInput |
+                              machining::StepStatus::kNotFinite)) != 0;
+  return bad ? Status::kError : Status::kOk;
+}
+
+}  // namespace smc::edge

@@ -1,0 +1,167 @@
+// Modules H (parameter estimator), I (force signal processor), J (contact
+// monitor), K (adaptive force controller), L (model-based force controller).
+
+#include <algorithm>
+#include <cmath>
+
+#include "smc/edge/modules.hpp"
+
+namespace smc::edge {
+
+// ---------------------------------------------------------------- I, J --
+
+Status ForceSignalProcessor::on_sample(Signals& s) noexcept {
+  peak_ = std::max(peak_, std::fabs(s.sample.f_y_n));
+  return Status::kOk;
+}
+
+Status ForceSignalProcessor::update(Signals& s) noexcept {
+  s.f_y_peak_n = peak_;
+  s.f_y_updated = true;
+  ++s.revolutions;
+  peak_ = 0;
+  return Status::kOk;
+}
+
+Status ContactMonitor::update(Signals& s) noexcept {
+  s.contact = s.f_y_peak_n > threshold_;
+  return Status::kOk;
+}
+
+// ------------------------------------------------------------------- H --
+
+void ParameterEstimator::configure(const EdgeParameters& p) {
+  p_ = p;
+  reset();
+}
+
+void ParameterEstimator::reset() noexcept {
+  theta_ = 0;
+  covariance_ = 0;
+  initialised_ = false;
+}
+
+Status ParameterEstimator::update(Signals& s) noexcept {
+  // The F_Y just measured was produced by the feed the routine (A) has been
+  // commanding during that revolution: the controllers change their output
+  // only at revolution boundaries, and A runs after them.
+  const double f = s.feed_per_tooth_cmd_mm;
+  if (!s.f_y_updated || !s.contact || f <= 0) return Status::kOk;
+  const double phi = std::pow(f, p_.adaptive_feed_exponent);
+  const double y = s.f_y_peak_n;
+  if (!std::isfinite(phi) || !std::isfinite(y) || phi <= 0) return Status::kError;
+  if (!initialised_) {
+    // First measurement: the one-sample estimate, with a covariance that lets
+    // the next few revolutions move it freely.
+    theta_ = y / phi;
+    covariance_ = 10.0 / (phi * phi);
+    initialised_ = true;
+  } else {
+    const double lambda = p_.rls_forgetting;
+    const double denom = lambda + phi * covariance_ * phi;
+    const double gain = covariance_ * phi / denom;
+    theta_ += gain * (y - phi * theta_);
+    covariance_ = (covariance_ - gain * phi * covariance_) / lambda;
+    // Bound the covariance so forgetting cannot blow it up without excitation.
+    covariance_ = std::min(covariance_, 100.0 / (phi * phi));
+  }
+  if (!(theta_ > 0) || !std::isfinite(theta_)) return Status::kError;
+  s.gain_estimate = theta_;
+  s.gain_valid = true;
+  return Status::kOk;
+}
+
+// ------------------------------------------------------------- K, L law --
+
+void ForceLaw::configure(double alpha, double min_fpt, double max_fpt, double time_constant_s,
+                         double period_s) noexcept {
+  alpha_ = alpha;
+  u_min_ = std::pow(min_fpt, alpha);
+  u_max_ = std::pow(max_fpt, alpha);
+  pole_ = std::exp(-period_s / time_constant_s);
+  u_ = u_min_;
+}
+
+void ForceLaw::start(double feed_per_tooth_mm) noexcept {
+  u_ = std::clamp(std::pow(std::max(feed_per_tooth_mm, 0.0), alpha_), u_min_, u_max_);
+}
+
+double ForceLaw::step(double force_n, double reference_n, double gain,
+                      double max_fpt_now) noexcept {
+  const double u_max = std::min(u_max_, std::pow(max_fpt_now, alpha_));
+  u_ += (1.0 - pole_) * (reference_n - force_n) / gain;
+  u_ = std::clamp(u_, u_min_, std::max(u_min_, u_max));
+  return feed_per_tooth();
+}
+
+double ForceLaw::feed_per_tooth() const noexcept { return std::pow(u_, 1.0 / alpha_); }
+
+namespace {
+
+// The most feed per tooth the machine allows at this spindle speed.
+double max_feed_now(const EdgeParameters& p, double rpm) noexcept {
+  return std::min(p.max_feed_per_tooth_mm, p.feed_per_tooth_for(p.max_feedrate_mm_s, rpm));
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------- K --
+
+void AdaptiveForceController::configure(const EdgeParameters& p) {
+  p_ = p;
+  law_.configure(p.adaptive_feed_exponent, p.min_feed_per_tooth_mm, p.max_feed_per_tooth_mm,
+                 p.adaptive_time_constant_s, p.slow_period_s);
+  reset();
+}
+
+void AdaptiveForceController::reset() noexcept { started_ = false; }
+
+Status AdaptiveForceController::update(Signals& s) noexcept {
+  if (!started_) {
+    // Bumpless start from the programmed feed: no model to do better.
+    law_.start(p_.feed_per_tooth_for(s.programmed_feedrate_mm_s, s.spindle_rpm));
+    started_ = true;
+  } else if (s.f_y_updated && s.gain_valid) {
+    law_.step(s.f_y_peak_n, s.force_reference_n, s.gain_estimate,
+              max_feed_now(p_, s.spindle_rpm));
+  }
+  s.controller_feed_per_tooth_mm = law_.feed_per_tooth();
+  s.controller_valid = true;
+  return std::isfinite(s.controller_feed_per_tooth_mm) ? Status::kOk : Status::kError;
+}
+
+// ------------------------------------------------------------------- L --
+
+void ModelBasedForceController::configure(const EdgeParameters& p) {
+  if (!p.has_force_model) {
+    throw ConfigError(
+        "supervisor_config.force_model: module L needs a force-process model (k_kn, beta, "
+        "alpha > 0); give one, or run SMC II without L");
+  }
+  p_ = p;
+  law_.configure(p.model_alpha, p.min_feed_per_tooth_mm, p.max_feed_per_tooth_mm,
+                 p.model_time_constant_s, p.slow_period_s);
+  reset();
+}
+
+void ModelBasedForceController::reset() noexcept { started_ = false; }
+
+Status ModelBasedForceController::update(Signals& s) noexcept {
+  // G = K d^beta, in N per (mm/tooth)^alpha.
+  const double gain = 1000.0 * p_.model_k_kn * std::pow(s.depth_mm, p_.model_beta);
+  if (!(gain > 0) || !std::isfinite(gain)) return Status::kError;
+  if (!started_) {
+    // Start at the model's feed for the reference, never above the program.
+    const double model_feed = std::pow(s.force_reference_n / gain, 1.0 / p_.model_alpha);
+    const double programmed = p_.feed_per_tooth_for(s.programmed_feedrate_mm_s, s.spindle_rpm);
+    law_.start(std::min(model_feed, programmed));
+    started_ = true;
+  } else if (s.f_y_updated) {
+    law_.step(s.f_y_peak_n, s.force_reference_n, gain, max_feed_now(p_, s.spindle_rpm));
+  }
+  s.controller_feed_per_tooth_mm = law_.feed_per_tooth();
+  s.controller_valid = true;
+  return std::isfinite(s.controller_feed_per_tooth_mm) ? Status::kOk : Status::kError;
+}
+
+}  // namespace smc::edge

@@ -1,0 +1,152 @@
+#include "smc/edge/parameters.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "smc_config.pb.h"
+
+namespace smc::edge {
+
+double EdgeParameters::force_reference_at(double spindle_rpm) const noexcept {
+  if (force_reference_n > 0) return force_reference_n;
+  const double v_m_s = 2.0 * std::numbers::pi * cutter_radius_mm * 1e-3 * spindle_rpm / 60.0;
+  if (v_m_s <= 0) return 0;
+  return max_spindle_power_w / v_m_s / force_safety_factor;
+}
+
+double EdgeParameters::feedrate_for(double feed_per_tooth_mm, double spindle_rpm) const noexcept {
+  return feed_per_tooth_mm * teeth * spindle_rpm / 60.0;
+}
+
+double EdgeParameters::feed_per_tooth_for(double feedrate_mm_s,
+                                          double spindle_rpm) const noexcept {
+  const double rev_s = teeth * spindle_rpm / 60.0;
+  return rev_s > 0 ? feedrate_mm_s / rev_s : 0.0;
+}
+
+namespace {
+
+class Checker {
+ public:
+  explicit Checker(std::string prefix) : prefix_(std::move(prefix)) {}
+
+  double positive(const char* field, double v, const char* fix) const {
+    if (!(v > 0) || !std::isfinite(v)) fail(field, "must be > 0", v, fix);
+    return v;
+  }
+  double non_negative(const char* field, double v, const char* fix) const {
+    if (!(v >= 0) || !std::isfinite(v)) fail(field, "must be >= 0", v, fix);
+    return v;
+  }
+  double in_range(const char* field, double v, double lo, double hi, const char* fix) const {
+    if (!(v >= lo && v <= hi)) {
+      std::ostringstream why;
+      why << "must be in [" << lo << ", " << hi << "]";
+      fail(field, why.str(), v, fix);
+    }
+    return v;
+  }
+  [[noreturn]] void fail(const char* field, const std::string& why, double v,
+                         const char* fix) const {
+    std::ostringstream msg;
+    msg << prefix_ << field << ": " << why << " (got " << v << "); " << fix;
+    throw ConfigError(msg.str());
+  }
+
+ private:
+  std::string prefix_;
+};
+
+}  // namespace
+
+EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) {
+  EdgeParameters p;
+  const Checker m("supervisor_config.machine.");
+  const auto& mc = cfg.machine();
+  p.max_spindle_power_w = m.positive("max_spindle_power_w", mc.max_spindle_power_w(),
+                                     "set the spindle's rated power, e.g. 745.7");
+  p.max_feedrate_mm_s = m.positive("max_feedrate_mm_s", mc.max_feedrate_mm_s(),
+                                   "set the axes' maximum feedrate, e.g. 36");
+  p.max_spindle_rpm = m.positive("max_spindle_rpm", mc.max_spindle_rpm(),
+                                 "set the spindle's maximum speed, e.g. 3000");
+
+  const Checker o("supervisor_config.operation.");
+  const auto& op = cfg.operation();
+  p.max_feed_per_tooth_mm = o.positive("max_feed_per_tooth_mm", op.max_feed_per_tooth_mm(),
+                                       "set the handbook limit, e.g. 0.6");
+  p.min_feed_per_tooth_mm =
+      o.in_range("min_feed_per_tooth_mm", op.min_feed_per_tooth_mm(), 1e-6,
+                 p.max_feed_per_tooth_mm, "set the lowest controlled feed, e.g. 0.005");
+  p.teeth = static_cast<int>(o.in_range("teeth", op.teeth(), 1, 64, "set the cutter's teeth"));
+  p.cutter_radius_mm = o.positive("cutter_radius_mm", op.cutter_radius_mm(),
+                                  "set the cutter radius, e.g. 25");
+  p.sample_period_s = o.in_range("sample_period_s", op.sample_period_s(), 1e-5, 0.01,
+                                 "set the force sampling period, e.g. 0.0005");
+  p.fast_period_s = o.in_range("fast_period_s", op.fast_period_s(), p.sample_period_s, 1.0,
+                               "set modules A and B's period, e.g. 0.01");
+  p.slow_period_s = o.in_range("slow_period_s", op.slow_period_s(), p.sample_period_s, 2.0,
+                               "set one spindle revolution, e.g. 0.04 at 1500 rpm");
+  p.contact_threshold_n = o.positive("contact_threshold_n", op.contact_threshold_n(),
+                                     "set the contact threshold on F_Y, e.g. 50");
+  p.force_reference_n = o.non_negative("force_reference_n", op.force_reference_n(),
+                                       "use 0 to derive it from the power limit");
+  p.force_safety_factor = op.force_safety_factor() == 0 ? 1.0
+                              : o.in_range("force_safety_factor", op.force_safety_factor(),
+                                           1.0, 10.0, "use 1 for no margin");
+  p.model_time_constant_s = o.positive("model_time_constant_s", op.model_time_constant_s(),
+                                       "set module L's closed-loop time constant, e.g. 0.1");
+  p.adaptive_time_constant_s =
+      o.positive("adaptive_time_constant_s", op.adaptive_time_constant_s(),
+                 "set module K's closed-loop time constant, e.g. 0.15");
+  p.rls_forgetting = o.in_range("rls_forgetting", op.rls_forgetting(), 0.5, 1.0,
+                                "set module H's forgetting factor, e.g. 0.95");
+  p.adaptive_feed_exponent = o.in_range("adaptive_feed_exponent", op.adaptive_feed_exponent(),
+                                        0.05, 1.5, "set the feed exponent alpha, e.g. 0.63");
+  p.chatter_threshold = o.in_range("chatter_threshold", op.chatter_threshold(), 1e-3, 1.0,
+                                   "set module E's energy-ratio threshold, e.g. 0.3");
+  p.chatter_confirm_revolutions = static_cast<int>(
+      o.in_range("chatter_confirm_revolutions", op.chatter_confirm_revolutions(), 1, 50,
+                 "set how many revolutions must exceed the threshold, e.g. 2"));
+  p.chatter_band_low_hz = o.non_negative("chatter_band_low_hz", op.chatter_band_low_hz(),
+                                         "set the chatter search band, e.g. 150");
+  p.chatter_band_high_hz = o.in_range("chatter_band_high_hz", op.chatter_band_high_hz(),
+                                      p.chatter_band_low_hz, 0.5 / p.sample_period_s,
+                                      "keep the band below the Nyquist frequency");
+  p.harmonic_guard_hz = o.non_negative("harmonic_guard_hz", op.harmonic_guard_hz(),
+                                       "set the band ignored around tooth harmonics, e.g. 15");
+  p.chatter_min_rms_n = o.non_negative("chatter_min_rms_n", op.chatter_min_rms_n(),
+                                       "set the F_z RMS below which E decides nothing, e.g. 5");
+  p.suppression_hold_s = o.in_range("suppression_hold_s", op.suppression_hold_s(), 0, 60,
+                                    "set module G's feed hold, e.g. 0.2");
+  p.force_sensor_range_n = o.positive("force_sensor_range_n", op.force_sensor_range_n(),
+                                      "set the dynamometer's range, e.g. 5000");
+
+  const auto& fm = cfg.force_model();
+  p.has_force_model = fm.k_kn() > 0 && fm.alpha() > 0 && fm.beta() > 0;
+  if (cfg.has_force_model() && !p.has_force_model) {
+    const Checker f("supervisor_config.force_model.");
+    f.positive("k_kn", fm.k_kn(), "give K of F_Y = K d^beta f^alpha in kN, e.g. 0.76");
+    f.positive("beta", fm.beta(), "give the depth exponent, e.g. 0.65");
+    f.positive("alpha", fm.alpha(), "give the feed exponent, e.g. 0.63");
+  }
+  p.model_k_kn = fm.k_kn();
+  p.model_beta = fm.beta();
+  p.model_alpha = fm.alpha();
+
+  auto samples = [&](double period, const char* field) {
+    const double n = period / p.sample_period_s;
+    const double r = std::round(n);
+    if (std::fabs(n - r) > 1e-6 * n) {
+      o.fail(field, "must be a whole number of sample periods", period,
+             "make it a multiple of sample_period_s");
+    }
+    return static_cast<int>(r);
+  };
+  p.samples_per_fast = samples(p.fast_period_s, "fast_period_s");
+  p.samples_per_revolution = samples(p.slow_period_s, "slow_period_s");
+  p.samples_per_hold = static_cast<int>(std::round(p.suppression_hold_s / p.sample_period_s));
+  return p;
+}
+
+}  // namespace smc::edge

@@ -1,0 +1,291 @@
+#include "smc/edge/runner.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "smc_config.pb.h"
+
+namespace smc::edge {
+
+std::vector<ScheduledInput> parse_feed_hold(const std::string& spec) {
+  const auto colon = spec.find(':');
+  char* end = nullptr;
+  const std::string t_str = spec.substr(0, colon);
+  const double t = std::strtod(t_str.c_str(), &end);
+  bool ok = colon != std::string::npos && end != t_str.c_str() && *end == '\0' && t >= 0;
+  double d = 0;
+  if (ok) {
+    const std::string d_str = spec.substr(colon + 1);
+    d = std::strtod(d_str.c_str(), &end);
+    ok = end != d_str.c_str() && *end == '\0' && d > 0;
+  }
+  if (!ok || !std::isfinite(t) || !std::isfinite(d)) {
+    throw std::invalid_argument("--feed-hold-at '" + spec +
+                                "': expected T:DURATION in seconds, e.g. 20:1.5");
+  }
+  return {{ScheduledInput::kFeedHoldOn, t}, {ScheduledInput::kFeedHoldOff, t + d}};
+}
+
+RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
+  RunResult run;
+  std::vector<ScheduledInput> inputs = options.inputs;
+  std::stable_sort(inputs.begin(), inputs.end(),
+                   [](const ScheduledInput& a, const ScheduledInput& b) { return a.t_s < b.t_s; });
+  size_t next_input = 0;
+  OperatorInputs op;
+  const double dt = core.config().params.sample_period_s;
+  const auto max_ticks = static_cast<uint64_t>(std::ceil(options.max_time_s / dt));
+  const int decimation = std::max(1, options.sample_decimation);
+  if (options.keep_samples) {
+    run.samples.reserve(static_cast<size_t>(std::min<uint64_t>(max_ticks, 4'000'000)) /
+                        static_cast<size_t>(decimation));
+  }
+  EdgeEvent ev;
+  RevolutionRecord rev;
+  ForceBatchRecord batch;
+  for (uint64_t i = 0; i < max_ticks; ++i) {
+    const double t_next = static_cast<double>(i + 1) * dt;
+    while (next_input < inputs.size() && inputs[next_input].t_s <= t_next + 1e-12) {
+      switch (inputs[next_input].kind) {
+        case ScheduledInput::kFeedHoldOn:
+          op.feed_hold = true;
+          break;
+        case ScheduledInput::kFeedHoldOff:
+          op.feed_hold = false;
+          ++op.releases;
+          break;
+        case ScheduledInput::kChatterSignal:
+          ++op.chatter_signals;
+          break;
+      }
+      core.set_operator_inputs(op);
+      ++next_input;
+    }
+    core.tick(false);
+    if (options.on_tick) options.on_tick(core);
+    if (options.keep_samples && i % static_cast<uint64_t>(decimation) == 0) {
+      const DriveSample& d = core.drive_sample();
+      const Signals& s = core.signals();
+      run.samples.push_back(TraceSample{d.force.t_s, d.x_mm, d.force.f_y_n, d.force.f_z_n,
+                                        s.f_y_peak_n, s.force_reference_n, s.feedrate_cmd_mm_s,
+                                        d.depth_mm, d.spindle_power_w, d.vibration_y_mm,
+                                        d.engagement,
+                                        static_cast<int16_t>(d.pass_index), d.in_pass, s.contact,
+                                        s.active, core.situation().active_steps});
+    }
+    while (core.events().try_pop(ev)) run.events.push_back(ev);
+    while (core.revolutions().try_pop(rev)) run.revolutions.push_back(rev);
+    while (core.batches().try_pop(batch)) {
+    }
+    run.ticks = i + 1;
+    if (core.done()) {
+      run.completed = true;
+      break;
+    }
+  }
+  run.end_time_s = core.drive_sample().force.t_s;
+  return run;
+}
+
+namespace {
+
+// Chatter onset from the simulated vibration, independent of module E. A
+// stable cut repeats itself every revolution (forced vibration at the tooth
+// harmonics); chatter does not. Per revolution in the cut, the statistic is
+// RMS(v_k - v_{k-1}) / RMS(v_k) of the relative tool-part vibration v over
+// consecutive revolutions: about 0.02-0.05 while the cutter enters the part
+// (the forced vibration changes slowly), growing past 1 in chatter. Onset is
+// the start of the first of two consecutive revolutions in which the
+// statistic is above kOnsetThreshold and larger than the revolution before.
+constexpr double kOnsetThreshold = 0.15;
+constexpr double kMinEngagement = 0.05;
+
+double chatter_onset(const RunResult& run, int samples_per_rev, int decimation) {
+  const int n = samples_per_rev / decimation;
+  if (n < 4 || run.samples.size() < static_cast<size_t>(3 * n)) return -1;
+  int above = 0;
+  double previous = 1e9;
+  for (size_t start = static_cast<size_t>(n); start + static_cast<size_t>(n) <= run.samples.size();
+       start += static_cast<size_t>(n)) {
+    double diff = 0, energy = 0, energy_before = 0;
+    bool in_cut = true;
+    for (size_t k = start; k < start + static_cast<size_t>(n); ++k) {
+      const TraceSample& now = run.samples[k];
+      const TraceSample& before = run.samples[k - static_cast<size_t>(n)];
+      if (std::isnan(now.vibration_y_mm) || std::isnan(before.vibration_y_mm)) return -1;
+      // In the cut, and not leaving the part (the cutter's exit changes the
+      // forced vibration abruptly, as its entry does).
+      in_cut = in_cut && now.in_pass && before.in_pass && now.engagement > kMinEngagement &&
+               before.engagement > kMinEngagement && now.engagement >= before.engagement;
+      const double d = now.vibration_y_mm - before.vibration_y_mm;
+      diff += d * d;
+      energy += now.vibration_y_mm * now.vibration_y_mm;
+      energy_before += before.vibration_y_mm * before.vibration_y_mm;
+    }
+    // Entering the part, the statistic starts high and falls revolution by
+    // revolution as the engagement settles; chatter makes it grow.
+    const double ratio = energy > 0 ? std::sqrt(diff / energy) : 0;
+    const bool growing = in_cut && energy_before > 0 && ratio > kOnsetThreshold && ratio > previous;
+    previous = in_cut ? ratio : 1e9;
+    above = growing ? above + 1 : 0;
+    if (above == 2) return run.samples[start - static_cast<size_t>(n)].t_s;
+  }
+  return -1;
+}
+
+}  // namespace
+
+smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
+  smc::config::RunSummary sum;
+  const EdgeConfig& cfg = core.config();
+  const EdgeParameters& p = cfg.params;
+  sum.set_config_id(cfg.config_id);
+  sum.set_variant(static_cast<smc::config::SmcVariant>(cfg.variant));
+  sum.set_completed(run.completed);
+  sum.set_passes_planned(cfg.program.count);
+
+  // Pass runs from the events: started → completed, or aborted by a rewrite.
+  struct PassRun {
+    smc::config::PassSummary s;
+    bool open = true;
+  };
+  std::vector<PassRun> runs;
+  double done_t = -1, detected_t = -1;
+  uint32_t rewrites = 0, chatter = 0;
+  for (const EdgeEvent& e : run.events) {
+    switch (e.kind) {
+      case EventKind::kPassStarted: {
+        if (!runs.empty() && runs.back().open) runs.back().open = false;
+        PassRun r;
+        r.s.set_index(static_cast<uint32_t>(e.pass_index));
+        r.s.set_depth_mm(e.depth_mm);
+        r.s.set_start_s(e.t_s);
+        r.s.set_end_s(-1);
+        r.s.set_contact_s(-1);
+        runs.push_back(r);
+        break;
+      }
+      case EventKind::kPassCompleted:
+        if (!runs.empty() && runs.back().open) {
+          runs.back().s.set_end_s(e.t_s);
+          runs.back().open = false;
+        }
+        break;
+      case EventKind::kProgramRewritten:
+        ++rewrites;
+        if (!runs.empty() && runs.back().open) {
+          runs.back().s.set_end_s(e.t_s);
+          runs.back().s.set_aborted(true);
+          runs.back().s.set_chatter(true);
+          runs.back().open = false;
+        }
+        break;
+      case EventKind::kChatterDetected:
+        ++chatter;
+        if (detected_t < 0) detected_t = e.t_s;
+        break;
+      case EventKind::kChatterSignalled:
+        ++chatter;
+        break;
+      case EventKind::kProgramDone:
+        done_t = e.t_s;
+        break;
+      case EventKind::kFault:
+        sum.add_faults(std::string(to_string(e.fault)) + " at t=" + std::to_string(e.t_s) + " s");
+        break;
+      default:
+        break;
+    }
+  }
+  sum.set_program_rewrites(rewrites);
+  sum.set_chatter_events(chatter);
+  sum.set_chatter_detected_s(detected_t);
+
+  const double ref = run.revolutions.empty() ? 0 : run.revolutions.front().f_ref_n;
+  sum.set_force_reference_n(ref);
+  double peak_f = 0, peak_p = 0, peak_mean = 0;
+  for (const auto& r : run.revolutions) {
+    peak_f = std::max(peak_f, r.f_y_peak_n);
+    peak_p = std::max(peak_p, r.power_peak_w);
+    peak_mean = std::max(peak_mean, r.power_mean_w);
+  }
+  sum.set_peak_mean_power_w(peak_mean);
+  sum.set_peak_mean_power_violation_pct(100.0 * (peak_mean - p.max_spindle_power_w) /
+                                        p.max_spindle_power_w);
+  sum.set_peak_force_n(peak_f);
+  sum.set_peak_force_violation_pct(ref > 0 ? 100.0 * (peak_f - ref) / ref : 0);
+  sum.set_peak_power_w(peak_p);
+  sum.set_peak_power_violation_pct(100.0 * (peak_p - p.max_spindle_power_w) /
+                                   p.max_spindle_power_w);
+
+  // Per pass: overshoot over contact revolutions, steady-state error over
+  // fully engaged revolutions after the controller has settled (5 time
+  // constants after full engagement or after a hold).
+  const bool model = (cfg.modules & bit(ModuleId::L)) != 0;
+  const double tau = model ? p.model_time_constant_s : p.adaptive_time_constant_s;
+  const int settle = static_cast<int>(std::ceil(5 * tau / p.slow_period_s));
+  const ModuleMask hold_mask = static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G));
+  double worst_overshoot = -1e9, worst_sse = 0, depth_removed = 0;
+  uint32_t completed = 0;
+  for (PassRun& pr : runs) {
+    const double t0 = pr.s.start_s();
+    const double t1 = pr.s.end_s() < 0 ? run.end_time_s + 1 : pr.s.end_s();
+    double max_f = 0, err_sum = 0;
+    int err_n = 0, settled = 0;
+    bool any_contact = false;
+    for (const auto& r : run.revolutions) {
+      if (r.t_s <= t0 || r.t_s > t1) continue;
+      const bool held = (r.active & hold_mask) != 0 || r.fault_hold;
+      if (r.chatter) pr.s.set_chatter(true);
+      if (!r.contact || held) {
+        settled = 0;
+        continue;
+      }
+      if (!any_contact) pr.s.set_contact_s(r.t_s);
+      any_contact = true;
+      max_f = std::max(max_f, r.f_y_peak_n);
+      const bool engaged = !std::isnan(r.engagement_min) && r.engagement_min >= 0.99;
+      settled = engaged ? settled + 1 : 0;
+      if (settled > settle && r.f_ref_n > 0) {
+        err_sum += std::fabs(r.f_y_peak_n - r.f_ref_n) / r.f_ref_n;
+        ++err_n;
+      }
+    }
+    if (any_contact && ref > 0) {
+      pr.s.set_overshoot_pct(100.0 * (max_f - ref) / ref);
+      worst_overshoot = std::max(worst_overshoot, pr.s.overshoot_pct());
+    }
+    if (err_n > 0) {
+      pr.s.set_steady_state_error_pct(100.0 * err_sum / err_n);
+      worst_sse = std::max(worst_sse, pr.s.steady_state_error_pct());
+    }
+    pr.s.set_steady_state_revolutions(static_cast<uint32_t>(err_n));
+    if (!pr.s.aborted() && pr.s.end_s() >= 0) {
+      ++completed;
+      depth_removed += pr.s.depth_mm();
+    }
+    *sum.add_passes() = pr.s;
+  }
+  sum.set_passes_completed(completed);
+  sum.set_depth_removed_mm(depth_removed);
+  sum.set_overshoot_pct(worst_overshoot > -1e9 ? worst_overshoot : 0);
+  sum.set_steady_state_error_pct(worst_sse);
+  sum.set_cycle_time_s(done_t >= 0 ? done_t : run.end_time_s);
+
+  double hold_s = 0;
+  for (const auto& r : run.revolutions) {
+    if ((r.active & bit(ModuleId::C)) != 0) hold_s += p.slow_period_s;
+  }
+  sum.set_feed_hold_s(hold_s);
+  const int decimation =
+      run.samples.size() > 1 && run.ticks > 0
+          ? static_cast<int>(std::lround(static_cast<double>(run.ticks) / static_cast<double>(run.samples.size())))
+          : 1;
+  const double onset = chatter_onset(run, p.samples_per_revolution, std::max(1, decimation));
+  sum.set_chatter_onset_s(onset);
+  sum.set_detection_delay_s(onset >= 0 && detected_t >= 0 ? detected_t - onset : -1);
+  return sum;
+}
+
+}  // namespace smc::edge

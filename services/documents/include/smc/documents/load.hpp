@@ -1,0 +1,40 @@
+#pragma once
+// Reading and writing the configuration-plane documents (idl/smc_config.proto)
+// as text: textproto (.textproto, .txtpb, .pbtxt) or JSON (.json), chosen by
+// the file's extension. Errors name file:line:col and what is wrong.
+
+#include <stdexcept>
+#include <string>
+
+namespace google::protobuf {
+class Message;
+}
+namespace smc::config {
+class SupervisorConfig;
+}
+
+namespace smc::documents {
+
+struct DocumentError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Parses `path` into `msg`. Unknown fields are errors. Throws DocumentError
+// with every problem found, one per line, as "path:line:col: message".
+void load(const std::string& path, google::protobuf::Message& msg);
+// Parses text (textproto, or JSON when `json`) with `name` in messages.
+void parse(const std::string& text, bool json, const std::string& name,
+           google::protobuf::Message& msg);
+
+// Serializes as JSON (Protobuf's JSON mapping) or textproto.
+std::string to_json(const google::protobuf::Message& msg, bool pretty = true);
+std::string to_textproto(const google::protobuf::Message& msg);
+
+// Reads a SupervisorConfig and resolves grafcet_file and milling_model_file
+// relative to the file's folder into grafcet_text and milling_model.
+smc::config::SupervisorConfig load_supervisor_config(const std::string& path);
+
+// The whole text of a file; DocumentError naming it when unreadable.
+std::string read_file(const std::string& path);
+
+}  // namespace smc::documents

@@ -1,0 +1,284 @@
+// Unit tests of the machining modules on their own: scripted inputs, traced
+// outputs (no simulated mill, no supervisor).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "edge_test_config.hpp"
+#include "smc/edge/modules.hpp"
+#include "smc/edge/program.hpp"
+
+using namespace smc::edge;
+
+namespace {
+
+EdgeParameters params() { return smc::edge::test::paper_parameters(); }
+
+}  // namespace
+
+TEST(Program, AddOnePassSplitsTheRemainingDepthEqually) {
+  FixedProgram p;
+  p.count = 1;
+  p.passes[0] = {2.0, 10.0, 1500};
+  ASSERT_TRUE(add_one_pass(p, 0));
+  ASSERT_EQ(p.count, 2);
+  EXPECT_DOUBLE_EQ(p.passes[0].depth_mm, 1.0);
+  EXPECT_DOUBLE_EQ(p.passes[1].depth_mm, 1.0);
+  EXPECT_DOUBLE_EQ(p.passes[1].feedrate_mm_s, 10.0);
+  EXPECT_EQ(p.revision, 1u);
+  // From the second of two passes: the last 1 mm becomes two of 0.5 mm.
+  ASSERT_TRUE(add_one_pass(p, 1));
+  ASSERT_EQ(p.count, 3);
+  EXPECT_DOUBLE_EQ(p.passes[0].depth_mm, 1.0);
+  EXPECT_DOUBLE_EQ(p.passes[1].depth_mm, 0.5);
+  EXPECT_DOUBLE_EQ(p.passes[2].depth_mm, 0.5);
+  EXPECT_DOUBLE_EQ(p.total_depth_mm(), 2.0);
+}
+
+TEST(Program, AddOnePassRefusesAFullProgramOrBadIndex) {
+  FixedProgram p;
+  p.count = FixedProgram::kMaxPasses;
+  for (auto& s : p.passes) s = {0.1, 10, 1500};
+  EXPECT_FALSE(add_one_pass(p, 0));
+  EXPECT_EQ(p.count, FixedProgram::kMaxPasses);
+  FixedProgram q;
+  q.count = 1;
+  q.passes[0] = {1, 10, 1500};
+  EXPECT_FALSE(add_one_pass(q, 1));
+  EXPECT_FALSE(add_one_pass(q, -1));
+}
+
+TEST(FeedrateRoutine, ProgrammedHoldControllerAndClamps) {
+  FeedrateRoutine a;
+  const EdgeParameters p = params();
+  a.configure(p);
+  Signals s;
+  s.spindle_rpm = 1500;
+  s.programmed_feedrate_mm_s = 10;
+  s.in_pass = true;
+  s.active = bit(ModuleId::A);
+  a.update(s);
+  EXPECT_DOUBLE_EQ(s.feedrate_cmd_mm_s, 10);
+  EXPECT_NEAR(s.feed_per_tooth_cmd_mm, 0.1, 1e-12);
+
+  s.active = static_cast<ModuleMask>(bit(ModuleId::A) | bit(ModuleId::C));  // feed hold
+  a.update(s);
+  EXPECT_EQ(s.feedrate_cmd_mm_s, 0);
+
+  s.active = static_cast<ModuleMask>(bit(ModuleId::A) | bit(ModuleId::L));
+  s.controller_valid = true;
+  s.controller_feed_per_tooth_mm = 0.05;
+  a.update(s);
+  EXPECT_NEAR(s.feedrate_cmd_mm_s, 5.0, 1e-12);
+  EXPECT_FALSE(s.feed_limited);
+
+  // 0.5 mm/tooth at 1500 rpm is 50 mm/s: clamped to the machine's 36 mm/s.
+  s.controller_feed_per_tooth_mm = 0.5;
+  a.update(s);
+  EXPECT_DOUBLE_EQ(s.feedrate_cmd_mm_s, 36);
+  EXPECT_TRUE(s.feed_limited);
+
+  // A NaN from a controller stops the feed rather than passing it on.
+  s.controller_feed_per_tooth_mm = std::nan("");
+  a.update(s);
+  EXPECT_EQ(s.feedrate_cmd_mm_s, 0);
+  EXPECT_TRUE(s.feed_limited);
+
+  // The suppression routine's hold also zeroes the feed.
+  s.active = bit(ModuleId::A);
+  s.suppression_hold = true;
+  a.update(s);
+  EXPECT_EQ(s.feedrate_cmd_mm_s, 0);
+}
+
+TEST(ForceLaw, ReachesTheReferenceWithTheGivenPoleOnAStaticProcess) {
+  ForceLaw law;
+  const double alpha = 0.63, tau = 0.12, T = 0.04;
+  law.configure(alpha, 0.005, 0.6, tau, T);
+  const double gain = 760.0;  // N per (mm/tooth)^alpha: 0.76 kN at d = 1 mm
+  law.start(0.1);
+  double f = law.feed_per_tooth();
+  double force = gain * std::pow(f, alpha);
+  const double ref = 190;
+  double prev_err = force - ref;
+  for (int k = 0; k < 100; ++k) {
+    f = law.step(force, ref, gain, 0.6);
+    force = gain * std::pow(f, alpha);
+    const double err = force - ref;
+    // With an exact model the error shrinks by the pole every revolution.
+    EXPECT_NEAR(err, law.pole() * prev_err, 1e-9 * ref);
+    prev_err = err;
+  }
+  EXPECT_NEAR(force, ref, 1e-6);
+}
+
+TEST(ForceLaw, IntegratorDoesNotWindUpAtTheFeedLimit) {
+  ForceLaw law;
+  law.configure(0.63, 0.005, 0.6, 0.1, 0.04);
+  law.start(0.1);
+  // A reference the machine cannot reach: the feed saturates at the limit.
+  for (int k = 0; k < 200; ++k) law.step(10.0, 1e6, 760.0, 0.2);
+  EXPECT_NEAR(law.feed_per_tooth(), 0.2, 1e-9);
+  // As soon as the force is too high, the feed comes down at once.
+  const double f = law.step(1e6, 100.0, 760.0, 0.2);
+  EXPECT_LT(f, 0.2);
+  EXPECT_GE(f, 0.005);
+}
+
+TEST(ParameterEstimator, ConvergesToTheProcessGainWithForgetting) {
+  ParameterEstimator h;
+  EdgeParameters p = params();
+  p.rls_forgetting = 0.9;
+  h.configure(p);
+  Signals s;
+  s.contact = true;
+  double theta = 500;  // N/(mm/tooth)^alpha
+  // After the jump the error shrinks by about lambda per revolution.
+  for (int k = 0; k < 100; ++k) {
+    if (k == 30) theta = 900;  // depth change: the gain jumps
+    const double f = 0.05 + 0.02 * std::sin(0.7 * k);
+    s.feed_per_tooth_cmd_mm = f;
+    s.f_y_peak_n = theta * std::pow(f, p.adaptive_feed_exponent);
+    s.f_y_updated = true;
+    ASSERT_EQ(h.update(s), Status::kOk);
+    if (k == 29) EXPECT_NEAR(s.gain_estimate, 500, 1.0);
+  }
+  EXPECT_NEAR(s.gain_estimate, 900, 1.0);
+  EXPECT_TRUE(s.gain_valid);
+}
+
+TEST(ParameterEstimator, NonFiniteInputIsAnError) {
+  ParameterEstimator h;
+  h.configure(params());
+  Signals s;
+  s.contact = true;
+  s.f_y_updated = true;
+  s.feed_per_tooth_cmd_mm = 0.1;
+  s.f_y_peak_n = std::nan("");
+  EXPECT_EQ(h.update(s), Status::kError);
+}
+
+TEST(ForceSignalProcessorAndContact, PeakOverOneRevolution) {
+  ForceSignalProcessor i;
+  ContactMonitor j;
+  const EdgeParameters p = params();
+  i.configure(p);
+  j.configure(p);
+  Signals s;
+  for (int k = 0; k < 80; ++k) {
+    s.sample.f_y_n = (k == 17 ? -123.0 : 40.0 * std::sin(0.3 * k));
+    i.on_sample(s);
+  }
+  i.update(s);
+  j.update(s);
+  EXPECT_DOUBLE_EQ(s.f_y_peak_n, 123.0);
+  EXPECT_TRUE(s.f_y_updated);
+  EXPECT_TRUE(s.contact);
+  for (int k = 0; k < 80; ++k) {
+    s.sample.f_y_n = 20;
+    i.on_sample(s);
+  }
+  i.update(s);
+  j.update(s);
+  EXPECT_DOUBLE_EQ(s.f_y_peak_n, 20.0);
+  EXPECT_FALSE(s.contact);  // 20 N is below the 50 N threshold
+}
+
+TEST(AutomaticChatterDetector, SeparatesToothHarmonicsFromChatter) {
+  AutomaticChatterDetector e;
+  const EdgeParameters p = params();
+  e.configure(p);
+  const double dt = p.sample_period_s;
+  auto feed = [&](double chatter_amp) {
+    Signals s;
+    s.spindle_rpm = 1500;
+    for (int k = 0; k < p.samples_per_revolution; ++k) {
+      const double t = k * dt;
+      // Tooth passing at 100 Hz with harmonics, plus a 620 Hz chatter component.
+      s.sample.f_z_n = 300 + 80 * std::sin(2 * std::numbers::pi * 100 * t) +
+                       30 * std::sin(2 * std::numbers::pi * 200 * t + 0.4) +
+                       chatter_amp * std::sin(2 * std::numbers::pi * 620 * t + 1.0);
+      e.on_sample(s);
+    }
+    e.update(s);
+    return s;
+  };
+  Signals stable = feed(0);
+  EXPECT_LT(stable.chatter_ratio, 1e-6);
+  EXPECT_FALSE(stable.chatter_detected);
+  e.reset();
+  Signals one = feed(120);
+  EXPECT_GT(one.chatter_ratio, p.chatter_threshold);
+  EXPECT_NEAR(one.chatter_frequency_hz, 625, 12.5 + 1e-9);  // 25 Hz bins
+  // One revolution above threshold is not enough when two are required.
+  EXPECT_EQ(one.chatter_detected, p.chatter_confirm_revolutions <= 1);
+  Signals two = feed(120);
+  EXPECT_TRUE(two.chatter_detected);
+}
+
+TEST(AutomaticChatterDetector, NoDecisionBelowTheRmsFloor) {
+  AutomaticChatterDetector e;
+  const EdgeParameters p = params();
+  e.configure(p);
+  Signals s;
+  s.spindle_rpm = 1500;
+  for (int r = 0; r < 4; ++r) {
+    for (int k = 0; k < p.samples_per_revolution; ++k) {
+      s.sample.f_z_n = 0.1 * p.chatter_min_rms_n * std::sin(2.3 * k);  // air: noise only
+      e.on_sample(s);
+    }
+    e.update(s);
+  }
+  EXPECT_FALSE(s.chatter_detected);
+  EXPECT_EQ(s.chatter_ratio, 0);
+}
+
+TEST(ChatterSuppression, RewriteThenHoldThenDone) {
+  ChatterSuppressionRoutine g;
+  ChatterSuppressor f;
+  const EdgeParameters p = params();
+  g.configure(p);
+  FixedProgram prog;
+  prog.count = 1;
+  prog.passes[0] = {2.0, 10, 1500};
+  int current = 0;
+  f.bind(&prog, &current);
+  Signals s;
+  g.update(s);
+  EXPECT_TRUE(s.rewrite_requested);
+  EXPECT_TRUE(s.suppression_hold);
+  EXPECT_EQ(f.update(s), Status::kOk);
+  EXPECT_TRUE(s.program_rewritten);
+  EXPECT_EQ(prog.count, 2);
+  const int periods = static_cast<int>(std::lround(p.suppression_hold_s / p.fast_period_s));
+  for (int k = 1; k < periods; ++k) {
+    g.update(s);
+    EXPECT_TRUE(s.suppression_hold) << k;
+    EXPECT_FALSE(s.suppression_done);
+  }
+  g.update(s);
+  EXPECT_FALSE(s.suppression_hold);
+  EXPECT_TRUE(s.suppression_done);
+}
+
+TEST(OperatorModules, HoldIsALevelAndChatterIsOnePulsePerSignal) {
+  OperatorInputMonitor b;
+  OperatorChatterDetector d;
+  Signals s;
+  s.operator_inputs.chatter_signals = 3;  // old signals before start-up
+  b.update(s);
+  d.update(s);
+  EXPECT_FALSE(s.chatter_signalled);
+  s.operator_inputs.feed_hold = true;
+  s.operator_inputs.chatter_signals = 4;
+  b.update(s);
+  d.update(s);
+  EXPECT_TRUE(s.feed_hold_requested);
+  EXPECT_TRUE(s.chatter_signalled);
+  b.update(s);
+  d.update(s);
+  EXPECT_TRUE(s.feed_hold_requested);
+  EXPECT_FALSE(s.chatter_signalled);
+}
