@@ -17,6 +17,8 @@ packages=(
   zlib1g-dev libcli11-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev sqlite3
+  # benchmarks: cyclictest beside the edge loop
+  rt-tests
 )
 
 if [[ "${1:-}" == "--print" ]]; then

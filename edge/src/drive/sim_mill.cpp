@@ -36,6 +36,10 @@ class LowPass {
     const double y = b0_ * x + z1_;
     z1_ = b1_ * x - a1_ * y + z2_;
     z2_ = b2_ * x - a2_ * y;
+    // A decaying state would sink into subnormal numbers in air and make
+    // every step a hundred times slower: flush it.
+    if (std::fabs(z1_) < 1e-30) z1_ = 0;
+    if (std::fabs(z2_) < 1e-30) z2_ = 0;
     return y;
   }
 

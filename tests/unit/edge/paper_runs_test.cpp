@@ -240,8 +240,8 @@ class FaultyDrive final : public Drive {
     } else if (kind_ == Kind::kSaturated && now && !fired_) {
       out.force.f_z_n = 1e6;
       fired_ = true;
-    } else if (kind_ == Kind::kZeroDepth && now) {
-      out.depth_mm = 0;
+    } else if (kind_ == Kind::kZeroDepth && now && out.force.t_s < at_s_ + 0.1) {
+      out.depth_mm = 0;  // for 100 ms: the cause goes away, the fault stays latched
     }
     return st;
   }
