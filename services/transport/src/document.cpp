@@ -58,13 +58,13 @@ const char* to_string(DocumentFault fault) noexcept {
   return "unknown";
 }
 
-std::string envelope_machine_id(const smc_data_Envelope& env) { return bounded(env.machine_id); }
+std::string envelope_key(const smc_data_Envelope& env) { return bounded(env.key); }
 std::string envelope_document_id(const smc_data_Envelope& env) {
   return bounded(env.document_id);
 }
 
 void encode_envelope(const google::protobuf::MessageLite& msg, const Schema& schema,
-                     std::string_view machine_id, std::string_view document_id,
+                     std::string_view key, std::string_view document_id,
                      uint64_t sequence_number, smc_data_Envelope& out) {
   const size_t size = msg.ByteSizeLong();
   if (size > kMaxPayload) {
@@ -73,7 +73,7 @@ void encode_envelope(const google::protobuf::MessageLite& msg, const Schema& sch
                             std::to_string(kMaxPayload));
   }
   out = smc_data_Envelope{};
-  copy_bounded(out.machine_id, machine_id, "machine_id");
+  copy_bounded(out.key, key, "key");
   copy_bounded(out.schema, schema.name, "schema");
   copy_bounded(out.document_id, document_id, "document_id");
   out.version = schema.version;
@@ -99,10 +99,8 @@ void free_envelope(smc_data_Envelope& env) noexcept {
 
 std::optional<DocumentError> decode_envelope(const smc_data_Envelope& env, const Schema& expected,
                                              google::protobuf::MessageLite& out) {
-  DocumentError err{DocumentFault::kWrongSchema, bounded(env.machine_id),
-                    bounded(env.document_id), {}};
-  const std::string where = "document '" + err.document_id + "' for machine '" +
-                            err.machine_id + "': ";
+  DocumentError err{DocumentFault::kWrongSchema, bounded(env.key), bounded(env.document_id), {}};
+  const std::string where = "document '" + err.document_id + "' for '" + err.key + "': ";
   const std::string schema = bounded(env.schema);
   if (schema != expected.name) {
     err.message = where + "schema is '" + schema + "', expected '" + expected.name + "'";
@@ -140,10 +138,10 @@ std::optional<DocumentError> decode_envelope(const smc_data_Envelope& env, const
 DocumentWriter::DocumentWriter(Topic<smc_data_Envelope>& topic, Schema schema)
     : writer_(topic), schema_(std::move(schema)) {}
 
-void DocumentWriter::publish(std::string_view machine_id, std::string_view document_id,
+void DocumentWriter::publish(std::string_view key, std::string_view document_id,
                              const google::protobuf::MessageLite& msg) {
   smc_data_Envelope env;
-  encode_envelope(msg, schema_, machine_id, document_id, ++sequence_, env);
+  encode_envelope(msg, schema_, key, document_id, ++sequence_, env);
   try {
     writer_.write(env);
   } catch (...) {

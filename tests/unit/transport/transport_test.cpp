@@ -270,7 +270,7 @@ TEST_F(RoundTrip, EnvelopeCarriesProtobufDocument) {
   smc_data_Envelope env;
   encode_envelope(cfg, schema, "mill-7", cfg.config_id(), 5, env);
   round_trip<smc_data_Envelope>(env, [&](const smc_data_Envelope& got) {
-    EXPECT_EQ(get_string(got.machine_id), "mill-7");
+    EXPECT_EQ(get_string(got.key), "mill-7");
     EXPECT_EQ(got.sequence_number, 5u);
     smc::config::SupervisorConfig back;
     auto err = decode_envelope(got, schema, back);
@@ -354,7 +354,7 @@ class BadEnvelope : public ::testing::Test {
     EXPECT_EQ(accepted, 0u);
     ASSERT_EQ(errors.size(), 1u);
     EXPECT_EQ(errors[0].fault, *expected) << errors[0].message;
-    EXPECT_EQ(errors[0].machine_id, "mill-1");
+    EXPECT_EQ(errors[0].key, "mill-1");
     if (must_mention) {
       EXPECT_NE(errors[0].message.find(must_mention), std::string::npos) << errors[0].message;
     }

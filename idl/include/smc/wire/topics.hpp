@@ -28,9 +28,11 @@ SMC_WIRE_TOPIC(smc_data_Envelope)
 
 namespace smc::wire {
 
-// Envelope topics: one document schema each.
-inline constexpr const char* kConfigTopic = "smc_config";  // smc.config.SupervisorConfig
-inline constexpr const char* kJobTopic = "smc_job";        // smc.config.JobAssignment
+// Envelope topics: one document schema each (idl/smc_data.idl, Envelope).
+inline constexpr const char* kConfigTopic = "smc_config";         // SupervisorConfig, key machine
+inline constexpr const char* kJobTopic = "smc_job";               // JobAssignment, key machine
+inline constexpr const char* kJobStatusTopic = "smc_job_status";  // JobStatus, key job
+inline constexpr const char* kProgramTopic = "smc_program";       // PartProgram, key machine
 
 // Copies a string into a bounded IDL string field, truncating if needed.
 template <size_t N>

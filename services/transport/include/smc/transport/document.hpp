@@ -31,9 +31,12 @@ enum class DocumentFault : uint8_t {
 
 const char* to_string(DocumentFault fault) noexcept;
 
+std::string envelope_key(const smc_data_Envelope& env);
+std::string envelope_document_id(const smc_data_Envelope& env);
+
 struct DocumentError {
   DocumentFault fault;
-  std::string machine_id;
+  std::string key;  // the envelope's key (machine id or job id)
   std::string document_id;
   std::string message;  // names the fault, expected vs found
 };
@@ -46,7 +49,7 @@ struct Schema {
 // Fills `out` (whose payload buffer the caller must later free with
 // free_envelope) from a message. Throws std::length_error past 64 MiB.
 void encode_envelope(const google::protobuf::MessageLite& msg, const Schema& schema,
-                     std::string_view machine_id, std::string_view document_id,
+                     std::string_view key, std::string_view document_id,
                      uint64_t sequence_number, smc_data_Envelope& out);
 void free_envelope(smc_data_Envelope& env) noexcept;
 
@@ -55,11 +58,11 @@ void free_envelope(smc_data_Envelope& env) noexcept;
 std::optional<DocumentError> decode_envelope(const smc_data_Envelope& env, const Schema& expected,
                                              google::protobuf::MessageLite& out);
 
-// Publishes documents of one schema on one topic, keyed by machine id.
+// Publishes documents of one schema on one topic, keyed (machine id or job id).
 class DocumentWriter {
  public:
   DocumentWriter(Topic<smc_data_Envelope>& topic, Schema schema);
-  void publish(std::string_view machine_id, std::string_view document_id,
+  void publish(std::string_view key, std::string_view document_id,
                const google::protobuf::MessageLite& msg);
   WriterBase& writer() noexcept { return writer_; }
 
@@ -70,14 +73,14 @@ class DocumentWriter {
 };
 
 // Receives documents of one schema. A document that fails any check is
-// reported and dropped; the last accepted document per machine stays in force.
+// reported and dropped; the last accepted document per key stays in force.
 template <class M>
 class DocumentReader {
  public:
   DocumentReader(Topic<smc_data_Envelope>& topic, Schema schema)
       : reader_(topic), schema_(std::move(schema)) {}
 
-  // on_accept(const std::string& machine_id, const M& doc) for each good one;
+  // on_accept(const std::string& key, const M& doc) for each good one;
   // on_reject(const DocumentError&) for each bad one. An optional validator
   // (returns an empty string when fine) turns semantic faults into kInvalid.
   template <class Accept, class Reject>
@@ -95,9 +98,9 @@ class DocumentReader {
         return;
       }
       std::string why = validate(doc);
-      std::string key = machine_id_of(env);
+      std::string key = envelope_key(env);
       if (!why.empty()) {
-        on_reject(DocumentError{DocumentFault::kInvalid, key, document_id_of(env), why});
+        on_reject(DocumentError{DocumentFault::kInvalid, key, envelope_document_id(env), why});
         return;
       }
       ++accepted;
@@ -107,31 +110,18 @@ class DocumentReader {
     });
     return accepted;
   }
-  // The last accepted document for a machine, if any.
-  const M* current(const std::string& machine_id) const {
-    auto it = accepted_.find(machine_id);
+  // The last accepted document for a key, if any.
+  const M* current(const std::string& key) const {
+    auto it = accepted_.find(key);
     return it == accepted_.end() ? nullptr : &it->second;
   }
   ReaderBase& reader() noexcept { return reader_; }
 
  private:
-  static std::string machine_id_of(const smc_data_Envelope& env);
-  static std::string document_id_of(const smc_data_Envelope& env);
   Reader<smc_data_Envelope> reader_;
   Schema schema_;
   std::map<std::string, M> accepted_;
 };
 
-std::string envelope_machine_id(const smc_data_Envelope& env);
-std::string envelope_document_id(const smc_data_Envelope& env);
-
-template <class M>
-std::string DocumentReader<M>::machine_id_of(const smc_data_Envelope& env) {
-  return envelope_machine_id(env);
-}
-template <class M>
-std::string DocumentReader<M>::document_id_of(const smc_data_Envelope& env) {
-  return envelope_document_id(env);
-}
 
 }  // namespace smc::transport
