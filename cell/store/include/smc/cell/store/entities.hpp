@@ -1,0 +1,122 @@
+#pragma once
+// Rows of the cell database as plain values. Documents (jobs, models, plans)
+// are the configuration-plane messages of idl/smc_config.proto; the database
+// keeps them serialized and the columns the cell queries by beside them.
+// Times are milliseconds since the Unix epoch (UTC).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "smc_config.pb.h"
+
+namespace smc::cell::store {
+
+struct Machine {
+  std::string id;  // "mill-1"
+  std::string name;
+  double max_spindle_power_w = 0;
+  double max_feedrate_mm_s = 0;
+  double max_spindle_rpm = 0;
+};
+
+struct Tool {
+  std::string id;  // "fm-r25-4t"
+  std::string name;
+  std::uint32_t teeth = 0;
+  double radius_mm = 0;
+  double lead_angle_deg = 0;
+};
+
+struct Material {
+  std::string id;  // "6061-T6"
+  std::string name;
+};
+
+// A part and the defaults of its part program. Geometry follows
+// smc.config.Workpiece: width across the feed, centre line offset from the
+// cutter axis, length along the feed.
+struct Part {
+  std::string id;
+  std::string name;
+  std::string material_id;
+  std::string tool_id;  // default tool of its program
+  double width_mm = 0;
+  double offset_mm = 0;
+  double length_mm = 0;
+  double total_depth_mm = 0;  // depth its program removes
+  double feedrate_mm_s = 0;   // programmed feedrate
+  double spindle_rpm = 0;     // programmed spindle speed
+};
+
+enum class ModelKind : std::uint8_t {
+  kForceProcess = 1,  // eq. (1): smc.config.ForceProcessModel
+  kMilling = 2,       // structural + cutting law: smc.config.MillingModel
+};
+
+// A process model for one machine, tool and material, optionally for one
+// part (part_id empty: any part of that material). Exactly one of `force`
+// and `milling` is meaningful, chosen by `kind`; their provenance and
+// validated fields are kept equal to the row's.
+struct ProcessModel {
+  std::string id;  // empty on add_model: the store assigns "model-000001", ...
+  ModelKind kind = ModelKind::kForceProcess;
+  std::string machine_id;
+  std::string tool_id;
+  std::string material_id;
+  std::string part_id;
+  smc::config::Provenance provenance = smc::config::PROVENANCE_UNSPECIFIED;
+  bool validated = false;
+  smc::config::ForceProcessModel force;
+  smc::config::MillingModel milling;
+  smc::config::FitStatistics fit;  // FITTED models: statistics of the fit
+  std::string note;                // where it came from, in words
+  std::int64_t created_at_ms = 0;
+};
+
+struct Job {
+  std::int64_t seq = 0;   // submission order; never reused
+  std::string id;         // spec.job_id()
+  smc::config::Job spec;  // as submitted, with the part's defaults filled in
+  smc::config::JobState state = smc::config::JOB_STATE_UNSPECIFIED;
+  std::string machine_id;  // assigned machine; empty before assignment
+  smc::config::SmcVariant variant = smc::config::SMC_UNSPECIFIED;
+  std::string explanation;    // why this variant (set_plan)
+  std::uint32_t attempt = 0;  // times assigned
+  std::int64_t created_at_ms = 0;
+  std::int64_t updated_at_ms = 0;
+  // Loaded by job(id), and by jobs() only when JobFilter::with_documents.
+  std::optional<smc::config::SupervisorConfig> plan;  // set_plan
+  std::optional<smc::config::RunSummary> result;      // record_result
+};
+
+struct JobEvent {
+  std::string job_id;
+  std::int64_t seq = 0;  // 1, 2, ... per job, in order
+  std::int64_t time_ms = 0;
+  smc::config::JobState from_state = smc::config::JOB_STATE_UNSPECIFIED;  // UNSPECIFIED: submission
+  smc::config::JobState to_state = smc::config::JOB_STATE_UNSPECIFIED;
+  std::string reason;
+  std::string machine_id;  // the job's machine after the event (may be empty)
+};
+
+// The job state machine (README.md):
+//   queued → planned → assigned → running → done | failed | interrupted
+//   assigned → interrupted, interrupted → queued (re-queue),
+//   interrupted → failed (given up), queued | planned → failed (cannot be planned).
+bool allowed_transition(smc::config::JobState from, smc::config::JobState to) noexcept;
+bool is_terminal(smc::config::JobState s) noexcept;  // done, failed
+
+// "queued", "planned", ... ; parse accepts these, any case, and the enum
+// names ("JOB_QUEUED").
+std::string_view state_name(smc::config::JobState s) noexcept;
+std::optional<smc::config::JobState> parse_state(std::string_view text);
+std::string_view kind_name(ModelKind k) noexcept;                      // "force-process", "milling"
+std::string_view provenance_name(smc::config::Provenance p) noexcept;  // "identified", ...
+std::string_view variant_name(smc::config::SmcVariant v) noexcept;     // "SMC I", ...
+
+// "2024-05-01T12:00:00.123Z"
+std::string format_time(std::int64_t time_ms);
+
+}  // namespace smc::cell::store

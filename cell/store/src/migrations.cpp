@@ -1,0 +1,156 @@
+// The schema, as an ordered list of migrations. Policy (README.md): a
+// migration, once released, is never edited; a change is a new migration
+// appended at the end. Each runs in its own transaction together with its
+// row in schema_migrations.
+
+#include "migrations.hpp"
+
+#include <array>
+
+#include "sqlite.hpp"
+
+namespace smc::cell::store::detail {
+
+namespace {
+
+constexpr std::array kMigrations{
+    Migration{1, "catalog, process models, jobs and job events", R"sql(
+PRAGMA application_id = 1397572419;  -- 'SMCC': refuse to open a foreign database
+
+CREATE TABLE machines (
+  id                  TEXT PRIMARY KEY NOT NULL,
+  name                TEXT NOT NULL,
+  max_spindle_power_w REAL NOT NULL CHECK (max_spindle_power_w > 0),
+  max_feedrate_mm_s   REAL NOT NULL CHECK (max_feedrate_mm_s > 0),
+  max_spindle_rpm     REAL NOT NULL CHECK (max_spindle_rpm > 0)
+);
+
+CREATE TABLE tools (
+  id             TEXT PRIMARY KEY NOT NULL,
+  name           TEXT NOT NULL,
+  teeth          INTEGER NOT NULL CHECK (teeth > 0),
+  radius_mm      REAL NOT NULL CHECK (radius_mm > 0),
+  lead_angle_deg REAL NOT NULL CHECK (lead_angle_deg >= 0 AND lead_angle_deg < 90)
+);
+
+CREATE TABLE materials (
+  id   TEXT PRIMARY KEY NOT NULL,
+  name TEXT NOT NULL
+);
+
+CREATE TABLE parts (
+  id             TEXT PRIMARY KEY NOT NULL,
+  name           TEXT NOT NULL,
+  material_id    TEXT NOT NULL REFERENCES materials (id),
+  tool_id        TEXT REFERENCES tools (id),
+  width_mm       REAL NOT NULL CHECK (width_mm > 0),
+  offset_mm      REAL NOT NULL,
+  length_mm      REAL NOT NULL CHECK (length_mm > 0),
+  total_depth_mm REAL NOT NULL CHECK (total_depth_mm > 0),
+  feedrate_mm_s  REAL NOT NULL CHECK (feedrate_mm_s > 0),
+  spindle_rpm    REAL NOT NULL CHECK (spindle_rpm > 0)
+);
+
+-- kind 1: smc.config.ForceProcessModel, 2: smc.config.MillingModel.
+-- provenance: smc.config.Provenance. part_id NULL: any part of the material.
+CREATE TABLE process_models (
+  id            TEXT PRIMARY KEY NOT NULL,
+  kind          INTEGER NOT NULL CHECK (kind IN (1, 2)),
+  machine_id    TEXT NOT NULL REFERENCES machines (id),
+  tool_id       TEXT NOT NULL REFERENCES tools (id),
+  material_id   TEXT NOT NULL REFERENCES materials (id),
+  part_id       TEXT REFERENCES parts (id),
+  provenance    INTEGER NOT NULL CHECK (provenance BETWEEN 0 AND 3),
+  validated     INTEGER NOT NULL CHECK (validated IN (0, 1)),
+  document      BLOB NOT NULL,
+  fit           BLOB,
+  note          TEXT NOT NULL DEFAULT '',
+  created_at_ms INTEGER NOT NULL
+);
+CREATE INDEX process_models_by_use ON process_models (material_id, part_id, machine_id, tool_id);
+
+-- state, variant: smc.config.JobState, smc.config.SmcVariant.
+-- spec: smc.config.Job; plan: smc.config.SupervisorConfig; result:
+-- smc.config.RunSummary. seq is AUTOINCREMENT: never reused.
+CREATE TABLE jobs (
+  seq           INTEGER PRIMARY KEY AUTOINCREMENT,
+  id            TEXT NOT NULL UNIQUE,
+  spec          BLOB NOT NULL,
+  part_id       TEXT NOT NULL REFERENCES parts (id),
+  state         INTEGER NOT NULL CHECK (state BETWEEN 1 AND 7),
+  machine_id    TEXT REFERENCES machines (id),
+  variant       INTEGER NOT NULL DEFAULT 0,
+  explanation   TEXT NOT NULL DEFAULT '',
+  plan          BLOB,
+  result        BLOB,
+  attempt       INTEGER NOT NULL DEFAULT 0 CHECK (attempt >= 0),
+  created_at_ms INTEGER NOT NULL,
+  updated_at_ms INTEGER NOT NULL
+);
+CREATE INDEX jobs_by_state ON jobs (state, seq);
+
+-- from_state 0 (unspecified): the submission.
+CREATE TABLE job_events (
+  job_id     TEXT NOT NULL REFERENCES jobs (id),
+  seq        INTEGER NOT NULL CHECK (seq > 0),
+  time_ms    INTEGER NOT NULL,
+  from_state INTEGER NOT NULL,
+  to_state   INTEGER NOT NULL,
+  reason     TEXT NOT NULL,
+  machine_id TEXT,
+  PRIMARY KEY (job_id, seq)
+) WITHOUT ROWID;
+
+-- Accepted jobs and their history are never edited away.
+CREATE TRIGGER jobs_never_deleted BEFORE DELETE ON jobs
+BEGIN SELECT RAISE(ABORT, 'jobs are never deleted'); END;
+CREATE TRIGGER job_events_append_only_update BEFORE UPDATE ON job_events
+BEGIN SELECT RAISE(ABORT, 'job_events are append-only'); END;
+CREATE TRIGGER job_events_append_only_delete BEFORE DELETE ON job_events
+BEGIN SELECT RAISE(ABORT, 'job_events are append-only'); END;
+
+-- Last number handed out per id series ("job", "model"); only ever grows.
+CREATE TABLE id_counters (
+  name TEXT PRIMARY KEY NOT NULL,
+  last INTEGER NOT NULL
+) WITHOUT ROWID;
+)sql"},
+};
+
+}  // namespace
+
+std::span<const Migration> migrations() noexcept { return kMigrations; }
+
+void migrate(sqlite3* db, const std::string& file) {
+  const int latest = kMigrations.back().version;
+  for (const Migration& m : kMigrations) {
+    Tx tx(db, file);
+    exec(db, file,
+         "CREATE TABLE IF NOT EXISTS schema_migrations ("
+         " version INTEGER PRIMARY KEY NOT NULL,"
+         " description TEXT NOT NULL,"
+         " applied_at_ms INTEGER NOT NULL)");
+    // Read inside the write transaction: another process may have migrated
+    // between our check and now.
+    Stmt cur(db, file, "SELECT COALESCE(MAX(version), 0) FROM schema_migrations");
+    cur.step();
+    const std::int64_t current = cur.int64(0);
+    if (current > latest) throw_newer(file, current, latest);
+    if (m.version <= current) continue;  // rolled back: nothing written
+    exec(db, file, m.sql);
+    Stmt(db, file,
+         "INSERT INTO schema_migrations (version, description, applied_at_ms) VALUES (?, ?, ?)")
+        .bind(m.version, std::string(m.description), now_ms())
+        .run();
+    tx.commit();
+  }
+}
+
+void throw_newer(const std::string& file, std::int64_t found, int latest) {
+  throw StoreError(file + ": schema version " + std::to_string(found) +
+                   " is newer than this smc-cell knows (" + std::to_string(latest) +
+                   "); fix: use the smc-cell that wrote it, or a newer one (the database is "
+                   "left untouched)");
+}
+
+}  // namespace smc::cell::store::detail
