@@ -17,5 +17,6 @@ struct Failure : std::runtime_error {
 
 void add_simulate(CLI::App& app);
 void add_check(CLI::App& app);
+void add_run(CLI::App& app);
 
 }  // namespace smc::edge::cli

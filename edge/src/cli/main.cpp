@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   app.add_option("--log-format", log_opts.format, "spdlog pattern, or 'json'");
   smc::edge::cli::add_simulate(app);
   smc::edge::cli::add_check(app);
+  smc::edge::cli::add_run(app);
   app.parse_complete_callback([&] { smc::log::init(log_opts); });
   try {
     app.parse(argc, argv);

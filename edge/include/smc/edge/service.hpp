@@ -1,0 +1,53 @@
+#pragma once
+// The edge process on DDS (smc-edge run): receives its configuration and job
+// assignments from the cell, runs each job in the real-time loop on the
+// simulated mill, and publishes what the cell and dashboards need.
+//
+//   in:  smc_config (SupervisorConfig, key = machine id), smc_job
+//        (JobAssignment), smc_operator_command (OperatorCommand)
+//   out: smc_force_summary, smc_force_batch, smc_chatter_event,
+//        smc_supervisor_situation, smc_edge_status (liveliness lease),
+//        smc_job_progress, smc_program (every part-program rewrite)
+//
+// A configuration is checked in full (parameters, program limits, Grafcet
+// parsed and verified, the mill's model) before it is accepted; a bad one is
+// reported on smc_edge_status and the last good one stays in force. A job
+// starts only under an accepted configuration whose id it names, and each
+// (job, attempt) runs at most once in the life of the process. The comms
+// thread is the caller's; the loop thread never touches DDS.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace smc::edge {
+
+struct ServiceOptions {
+  std::string machine_id;
+  uint32_t domain_id = 0;
+  std::string partition;                     // DDS partition (tests isolate themselves)
+  std::chrono::milliseconds lease{2000};     // liveliness lease of smc_edge_status
+  int batch_decimation = 1;                  // raw force: every n-th sample
+  double speedup = 1.0;                      // machine seconds per wall second
+  bool realtime = true;                      // SCHED_FIFO, mlockall when permitted
+  std::string mill_model_file;               // the mill's own model; default: the config's
+};
+
+class EdgeService {
+ public:
+  explicit EdgeService(ServiceOptions options);
+  ~EdgeService();
+  EdgeService(const EdgeService&) = delete;
+  EdgeService& operator=(const EdgeService&) = delete;
+
+  // Runs until `stop` becomes true. Returns the process exit code.
+  int run(const std::atomic<bool>& stop);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace smc::edge

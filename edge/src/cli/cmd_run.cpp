@@ -1,0 +1,57 @@
+// smc-edge run: the edge process of one mill on DDS.
+
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <csignal>
+
+#include "commands.hpp"
+#include "smc/edge/service.hpp"
+
+namespace smc::edge::cli {
+
+namespace {
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+}  // namespace
+
+void add_run(CLI::App& app) {
+  auto opt = std::make_shared<ServiceOptions>();
+  auto lease_ms = std::make_shared<int>(2000);
+  auto no_rt = std::make_shared<bool>(false);
+  CLI::App* sub = app.add_subcommand(
+      "run",
+      "Run the edge of one mill on DDS: take configurations and jobs from the cell, run each\n"
+      "job in the 2 kHz real-time loop on the simulated mill, publish force, chatter,\n"
+      "supervisor state, status and progress. Stops cleanly on SIGINT or SIGTERM.");
+  sub->add_option("--machine", opt->machine_id, "Machine id (the cell addresses this edge by it)")
+      ->required();
+  sub->add_option("--domain", opt->domain_id, "DDS domain id")->capture_default_str();
+  sub->add_option("--partition", opt->partition, "DDS partition (isolates a cell)");
+  sub->add_option("--lease-ms", *lease_ms, "Liveliness lease of the status topic")
+      ->capture_default_str()
+      ->check(CLI::Range(100, 600000));
+  sub->add_option("--speedup", opt->speedup,
+                  "Machine seconds per wall second (1 = real time; tests and demos go faster)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 100.0));
+  sub->add_option("--batch-decimation", opt->batch_decimation,
+                  "Publish every n-th raw force sample")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
+  sub->add_option("--mill-model", opt->mill_model_file,
+                  "The simulated mill's own milling model (default: the configuration's)")
+      ->check(CLI::ExistingFile);
+  sub->add_flag("--no-realtime", *no_rt, "Do not ask for SCHED_FIFO and mlockall");
+  sub->callback([opt, lease_ms, no_rt] {
+    opt->lease = std::chrono::milliseconds(*lease_ms);
+    opt->realtime = !*no_rt;
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    EdgeService service(*opt);
+    const int rc = service.run(g_stop);
+    if (rc != 0) throw Failure(rc, "edge stopped with errors");
+  });
+}
+
+}  // namespace smc::edge::cli
