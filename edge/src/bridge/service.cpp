@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <thread>
 
 #include "smc/common/clock.hpp"
 #include "smc/documents/load.hpp"
@@ -40,6 +41,19 @@ const tr::Schema kProgramSchema{"smc.config.PartProgram", smc::config::SCHEMA_VE
 
 // A job in the loop: the core, its mill and the real-time thread.
 struct RunningJob {
+  ~RunningJob() {
+    if (pacer.joinable()) {
+      stop_pacer = true;
+      pacer.join();
+    }
+  }
+  // Paced mode (--speedup other than 1): a plain thread ticks the core so
+  // that machine time runs `speedup` times faster than the wall clock. There
+  // is no machine to protect in an accelerated simulation, so a late tick is
+  // simply caught up, not an overrun.
+  std::thread pacer;
+  std::atomic<bool> stop_pacer{false};
+  std::atomic<bool> paced_done{false};
   smc::config::JobAssignment assignment;
   smc::config::SupervisorConfig config;
   std::unique_ptr<SimulatedMill> mill;
@@ -92,6 +106,8 @@ struct EdgeService::Impl {
   uint64_t chatter_id_base = static_cast<uint64_t>(unix_ns() / 1000);  // survives restarts
   uint64_t chatter_seq = 0;
   uint32_t situation_seq = 0;
+  std::optional<smc_data_ChatterEvent> pending_chatter;
+  std::chrono::steady_clock::time_point pending_since{};
   std::chrono::steady_clock::time_point last_status{};
 
   explicit Impl(ServiceOptions o)
@@ -153,6 +169,18 @@ struct EdgeService::Impl {
 
   // ------------------------------------------------------ configuration --
 
+  // The mill's own model (--mill-model) machines the job's part: the
+  // configuration's cutter and part geometry, the mill's cutting law and
+  // structure. Without --mill-model the configuration's model is used.
+  void use_mill_model(smc::config::SupervisorConfig& cfg) const {
+    if (opt.mill_model_file.empty()) return;
+    smc::config::MillingModel own;
+    smc::documents::load(opt.mill_model_file, own);
+    if (cfg.milling_model().has_cutter()) *own.mutable_cutter() = cfg.milling_model().cutter();
+    if (cfg.milling_model().has_workpiece()) *own.mutable_workpiece() = cfg.milling_model().workpiece();
+    *cfg.mutable_milling_model() = own;
+  }
+
   // Full check: everything the job would build, built now.
   std::string check(smc::config::SupervisorConfig& cfg) {
     if (cfg.machine().machine_id() != opt.machine_id) {
@@ -161,9 +189,7 @@ struct EdgeService::Impl {
     }
     try {
       EdgeConfig ec = edge_config_from_proto(cfg);
-      if (!opt.mill_model_file.empty()) {
-        smc::documents::load(opt.mill_model_file, *cfg.mutable_milling_model());
-      }
+      use_mill_model(cfg);
       SimulatedMill probe(cfg.milling_model(), cfg.simulation(), ec.params.sample_period_s);
     } catch (const std::exception& e) {
       return e.what();
@@ -230,10 +256,7 @@ struct EdgeService::Impl {
   void start_job(const smc::config::JobAssignment& a) {
     auto j = std::make_unique<RunningJob>();
     j->assignment = a;
-    j->config = *config;
-    if (!opt.mill_model_file.empty()) {
-      smc::documents::load(opt.mill_model_file, *j->config.mutable_milling_model());
-    }
+    j->config = *config;  // already carries the mill's model (check())
     EdgeConfig ec = edge_config_from_proto(j->config);
     j->mill = std::make_unique<SimulatedMill>(j->config.milling_model(), j->config.simulation(),
                                               ec.params.sample_period_s);
@@ -252,9 +275,28 @@ struct EdgeService::Impl {
     job = std::move(j);
     operator_inputs = OperatorInputs{};
     job->rt->push_operator_inputs(operator_inputs);
-    job->rt->start();
-    spdlog::info("{}: real-time set-up: {}", opt.machine_id,
-                 rt::summary(job->rt->setup_report(), ro));
+    if (opt.speedup == 1.0) {
+      job->rt->start();
+      spdlog::info("{}: real-time set-up: {}", opt.machine_id,
+                   rt::summary(job->rt->setup_report(), ro));
+    } else {
+      RunningJob* rj = job.get();
+      const auto period = ro.period;
+      rj->pacer = std::thread([rj, period] {
+        RealClock c;
+        Nanos next = c.now();
+        rt::TickInfo info{};
+        while (!rj->stop_pacer && !rj->core->done()) {
+          rj->rt->tick(info);
+          ++info.index;
+          next += period;
+          if (c.now() < next) c.sleep_until(next);
+        }
+        rj->paced_done = true;
+      });
+      spdlog::info("{}: paced simulation at {}x real time (no real-time deadlines)", opt.machine_id,
+                   opt.speedup);
+    }
     set_state(smc_data_EDGE_RUNNING, "running job " + a.job_id());
     publish_progress(smc_data_JOB_RUNNING, "started");
   }
@@ -273,7 +315,7 @@ struct EdgeService::Impl {
     const double total = c.program().total_depth_mm();
     const int pass = c.drive_sample().pass_index;
     p.depth_removed_mm = static_cast<float>(c.done() ? total : c.program().depth_before(pass));
-    p.fraction_done = static_cast<float>(total > 0 ? p.depth_removed_mm / total : 0);
+    p.fraction_done = static_cast<float>(total > 0 ? static_cast<double>(p.depth_removed_mm) / total : 0.0);
     p.chatter_events = job->chatter_events;
     p.peak_force_n = static_cast<float>(job->peak_force_n);
     set_string(p.message, why);
@@ -281,9 +323,25 @@ struct EdgeService::Impl {
     job->last_progress = std::chrono::steady_clock::now();
   }
 
-  void finish_job() {
+  bool job_running() const {
+    return opt.speedup == 1.0 ? job->rt->loop().running() : !job->paced_done.load();
+  }
+
+  void stop_loop() {
+    if (job->pacer.joinable()) {
+      job->stop_pacer = true;
+      job->pacer.join();
+    }
     job->rt->stop();
+  }
+
+  void finish_job() {
+    stop_loop();
     drain();  // whatever the loop produced last
+    if (pending_chatter) {
+      chatter_writer.write(*pending_chatter);
+      pending_chatter.reset();
+    }
     const bool ok = job->core->done();
     publish_progress(ok ? smc_data_JOB_DONE : smc_data_JOB_FAILED,
                      ok ? "program complete" : "stopped before the end");
@@ -333,6 +391,12 @@ struct EdgeService::Impl {
     EdgeCore& c = *job->core;
     EdgeEvent e;
     while (c.events().try_pop(e)) on_event(e);
+    // No rewrite follows when the configuration has no suppressor, or the
+    // program is full: publish the event as it is.
+    if (pending_chatter && std::chrono::steady_clock::now() - pending_since > 200ms) {
+      chatter_writer.write(*pending_chatter);
+      pending_chatter.reset();
+    }
     RevolutionRecord r;
     while (c.revolutions().try_pop(r)) {
       smc_data_ForceSummary s{};
@@ -388,7 +452,9 @@ struct EdgeService::Impl {
       }
       case EventKind::kChatterDetected:
       case EventKind::kChatterSignalled: {
-        smc_data_ChatterEvent ce{};
+        // Published once the suppressor has rewritten the program (next
+        // fast period), so that it carries the new pass count.
+        smc_data_ChatterEvent& ce = pending_chatter.emplace();
         set_string(ce.machine_id, opt.machine_id);
         ce.event_id = chatter_id_base + ++chatter_seq;
         ce.machine_time_ns = machine_ns(e.t_s);
@@ -399,7 +465,7 @@ struct EdgeService::Impl {
         ce.pass_index = static_cast<uint16_t>(e.pass_index);
         ce.new_pass_count = static_cast<uint16_t>(e.pass_count);
         set_string(ce.job_id, job->assignment.job_id());
-        chatter_writer.write(ce);
+        pending_since = std::chrono::steady_clock::now();
         ++job->chatter_events;
         break;
       }
@@ -415,6 +481,11 @@ struct EdgeService::Impl {
         }
         prog.set_revision(fp.revision);
         program_writer.publish(opt.machine_id, job->assignment.job_id(), prog);
+        if (pending_chatter) {
+          pending_chatter->new_pass_count = fp.count;
+          chatter_writer.write(*pending_chatter);
+          pending_chatter.reset();
+        }
         spdlog::warn("{}: chatter suppressor rewrote the program to {} passes", opt.machine_id, fp.count);
         publish_progress(smc_data_JOB_RUNNING, "program rewritten to " + std::to_string(fp.count) + " passes");
         break;
@@ -448,7 +519,7 @@ struct EdgeService::Impl {
       take_jobs();
       drain();
       if (job) {
-        if (job->core->done() || !job->rt->loop().running()) {
+        if (job->core->done() || !job_running()) {
           finish_job();
         } else if (std::chrono::steady_clock::now() - job->last_progress > 1s) {
           publish_progress(smc_data_JOB_RUNNING, "running");
@@ -457,7 +528,7 @@ struct EdgeService::Impl {
       if (std::chrono::steady_clock::now() - last_status > 1s) publish_status();
     }
     if (job) {
-      job->rt->stop();
+      stop_loop();
       drain();
       publish_progress(smc_data_JOB_INTERRUPTED, "edge stopped");
       job.reset();

@@ -1,0 +1,40 @@
+#pragma once
+// The cell service (smc-cell serve): jobs from the database are selected
+// (SMC I or II, with an explanation), planned, configured, verified and
+// dispatched to idle mills over DDS; their progress is tracked and every
+// state change persisted. See cell/README.md for the job policy.
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <string>
+
+namespace smc::cell {
+
+struct ServiceOptions {
+  std::string db_path;
+  std::string grafcet_dir;               // smc1.grafcet, smc2.grafcet
+  std::string defaults_file;             // cell/configs/defaults.textproto
+  uint32_t domain_id = 0;
+  std::string partition;
+  // An edge whose status has not been alive for this long after the cell
+  // starts, or whose liveliness is lost, interrupts its job.
+  std::chrono::milliseconds edge_grace{6000};
+  uint32_t max_attempts = 3;             // an interrupted job is re-queued until this many attempts
+  bool learn = true;                     // fit force-process models from SMC II runs
+};
+
+class CellService {
+ public:
+  explicit CellService(ServiceOptions options);
+  ~CellService();
+  CellService(const CellService&) = delete;
+  CellService& operator=(const CellService&) = delete;
+  int run(const std::atomic<bool>& stop);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace smc::cell

@@ -1,0 +1,467 @@
+#include "smc/cell/service.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <set>
+#include <vector>
+
+#include "smc/cell/planner.hpp"
+#include "smc/cell/store/store.hpp"
+#include "smc/documents/load.hpp"
+#include "smc/edge/core.hpp"
+#include "smc/machining/force_process.hpp"
+#include "smc/machining/model_proto.hpp"
+#include "smc/transport/document.hpp"
+#include "smc/transport/participant.hpp"
+#include "smc/wire/topics.hpp"
+
+namespace smc::cell {
+
+namespace tr = smc::transport;
+namespace cfg = smc::config;
+using smc::wire::get_string;
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+const tr::Schema kConfigSchema{"smc.config.SupervisorConfig", cfg::SCHEMA_VERSION_CURRENT};
+const tr::Schema kJobSchema{"smc.config.JobAssignment", cfg::SCHEMA_VERSION_CURRENT};
+const tr::Schema kStatusSchema{"smc.config.JobStatus", cfg::SCHEMA_VERSION_CURRENT};
+
+int64_t unix_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string config_id_for(const store::Job& j, uint32_t attempt) {
+  return j.id + "-a" + std::to_string(attempt);
+}
+
+struct Mill {
+  bool alive = false;
+  bool seen = false;
+  smc_data_EdgeState state = smc_data_EDGE_IDLE;
+  Clock::time_point lost_since = Clock::now();
+};
+
+struct Progress {
+  uint32_t pass_index = 0, pass_count = 0, chatter = 0;
+  double fraction = 0;
+  float peak_force = 0;
+};
+
+}  // namespace
+
+struct CellService::Impl {
+  ServiceOptions opt;
+  store::Store db;
+  Planner planner;
+  tr::Participant participant;
+  tr::Topic<smc_data_Envelope> config_topic, job_topic, status_doc_topic;
+  tr::DocumentWriter config_writer, job_writer, status_doc_writer;
+  tr::Topic<smc_data_EdgeStatus> edge_topic;
+  tr::Reader<smc_data_EdgeStatus> edge_reader;
+  tr::Topic<smc_data_JobProgress> progress_topic;
+  tr::Reader<smc_data_JobProgress> progress_reader;
+  tr::Topic<smc_data_ForceSummary> summary_topic;
+  tr::Reader<smc_data_ForceSummary> summary_reader;
+  tr::Topic<smc_data_ChatterEvent> chatter_topic;
+  tr::Reader<smc_data_ChatterEvent> chatter_reader;
+  tr::WaitSet waitset;
+
+  std::map<std::string, Mill> mills;
+  std::map<std::string, Progress> progress;                 // by job id
+  std::map<std::string, std::vector<machining::ForceSample>> learning;  // by job id
+  std::set<uint64_t> chatter_seen;
+  int64_t data_version = -1;
+  Clock::time_point started = Clock::now();
+  Clock::time_point last_scan{};
+
+  explicit Impl(ServiceOptions o)
+      : opt(std::move(o)),
+        db(store::Store::open(opt.db_path, store::OpenMode::kExisting)),
+        planner(opt.grafcet_dir, load_defaults(opt.defaults_file)),
+        participant({.domain_id = opt.domain_id, .partition = opt.partition}),
+        config_topic(participant, smc::wire::kConfigTopic),
+        job_topic(participant, smc::wire::kJobTopic),
+        status_doc_topic(participant, smc::wire::kJobStatusTopic),
+        config_writer(config_topic, kConfigSchema),
+        job_writer(job_topic, kJobSchema),
+        status_doc_writer(status_doc_topic, kStatusSchema),
+        edge_topic(participant),
+        edge_reader(edge_topic),
+        progress_topic(participant),
+        progress_reader(progress_topic),
+        summary_topic(participant),
+        summary_reader(summary_topic),
+        chatter_topic(participant),
+        chatter_reader(chatter_topic),
+        waitset(participant) {
+    waitset.attach(edge_reader, 1);
+    waitset.attach(progress_reader, 2);
+    waitset.attach(chatter_reader, 3);
+    for (const auto& m : db.machines()) mills[m.id];
+  }
+
+  static cfg::SupervisorConfig load_defaults(const std::string& path) {
+    cfg::SupervisorConfig d;
+    smc::documents::load(path, d);
+    return d;
+  }
+
+  // ------------------------------------------------------------ helpers --
+
+  void publish_status(const store::Job& j, const std::string& reason) {
+    cfg::JobStatus st;
+    *st.mutable_job() = j.spec;
+    st.mutable_job()->set_job_id(j.id);
+    st.set_state(j.state);
+    st.set_variant(j.variant);
+    st.set_explanation(j.explanation);
+    st.set_machine_id(j.machine_id);
+    st.set_attempt(j.attempt);
+    if (j.plan) st.set_passes_planned(static_cast<uint32_t>(j.plan->program().passes_size()));
+    const auto it = progress.find(j.id);
+    if (it != progress.end()) {
+      st.set_pass_index(it->second.pass_index);
+      st.set_pass_count(it->second.pass_count);
+      st.set_fraction_done(it->second.fraction);
+      st.set_chatter_events(it->second.chatter);
+    } else {
+      st.set_pass_count(st.passes_planned());
+    }
+    if (j.state == cfg::JOB_DONE) st.set_fraction_done(1.0);
+    if (j.result) *st.mutable_result() = *j.result;
+    st.set_updated_unix_ms(unix_ms());
+    st.set_reason(reason);
+    status_doc_writer.publish(j.id, j.id, st);
+  }
+
+  bool move(const store::Job& j, cfg::JobState to, const std::string& reason,
+            const std::string& machine = {}) {
+    const auto ev = db.transition(j.id, j.state, to, reason, machine);
+    if (!ev) return false;
+    spdlog::info("job {}: {} -> {} ({})", j.id, store::state_name(j.state), store::state_name(to), reason);
+    if (auto now = db.job(j.id)) publish_status(*now, reason);
+    return true;
+  }
+
+  void withdraw(const std::string& machine) {
+    cfg::JobAssignment none;
+    job_writer.publish(machine, "none", none);
+  }
+
+  void send(const store::Job& j, const store::Machine& m, uint32_t attempt) {
+    const cfg::SupervisorConfig c = Planner::for_machine(*j.plan, m, config_id_for(j, attempt));
+    config_writer.publish(m.id, c.config_id(), c);
+    cfg::JobAssignment a;
+    a.set_job_id(j.id);
+    a.set_config_id(c.config_id());
+    a.set_attempt(attempt);
+    job_writer.publish(m.id, j.id, a);
+  }
+
+  // ---------------------------------------------------------- planning --
+
+  void plan_queued() {
+    for (const auto& j : db.jobs({.state = cfg::JOB_QUEUED, .with_documents = true})) {
+      try {
+        PlanInputs in{j, *db.part(j.spec.part_id()), *db.tool(j.spec.tool_id()), {}};
+        // Models are stored per machine: take those of the job's machine, or any machine.
+        std::set<std::string> seen;
+        for (const auto& m : db.machines()) {
+          if (!j.spec.machine_id().empty() && m.id != j.spec.machine_id()) continue;
+          for (auto& pm : db.find_models(m.id, in.tool.id, in.part.material_id, in.part.id)) {
+            if (seen.insert(pm.id).second) in.models.push_back(std::move(pm));
+          }
+          if (!in.models.empty()) break;
+        }
+        const Selection sel = select_variant(in);
+        const Plan plan = planner.plan(in, sel);
+        // Verify now: the configuration the edge will get must be valid.
+        const store::Machine m = *db.machine(j.spec.machine_id().empty() ? mills.begin()->first
+                                                                         : j.spec.machine_id());
+        (void)smc::edge::edge_config_from_proto(Planner::for_machine(plan.config, m, "check"));
+        db.set_plan(j.id, sel.variant, plan.config.explanation(), plan.config);
+        move(*db.job(j.id), cfg::JOB_PLANNED,
+             std::string(store::variant_name(sel.variant)) + " planned in " +
+                 std::to_string(static_cast<int>(plan.planning_s * 1000)) + " ms");
+      } catch (const std::exception& e) {
+        spdlog::error("job {}: cannot be planned: {}", j.id, e.what());
+        move(j, cfg::JOB_FAILED, std::string("cannot be planned: ") + e.what());
+      }
+    }
+  }
+
+  // ----------------------------------------------------------- dispatch --
+
+  std::set<std::string> busy_machines() {
+    std::set<std::string> busy;
+    for (auto s : {cfg::JOB_ASSIGNED, cfg::JOB_RUNNING}) {
+      for (const auto& j : db.jobs({.state = s})) busy.insert(j.machine_id);
+    }
+    return busy;
+  }
+
+  void dispatch() {
+    auto busy = busy_machines();
+    auto planned = db.jobs({.state = cfg::JOB_PLANNED, .with_documents = true});
+    std::stable_sort(planned.begin(), planned.end(), [](const store::Job& a, const store::Job& b) {
+      return a.spec.priority() > b.spec.priority();
+    });
+    for (const auto& j : planned) {
+      for (auto& [id, mill] : mills) {
+        if (busy.count(id) || !mill.alive) continue;
+        if (mill.state != smc_data_EDGE_IDLE && mill.state != smc_data_EDGE_CONFIGURED) continue;
+        if (!j.spec.machine_id().empty() && j.spec.machine_id() != id) continue;
+        const auto m = db.machine(id);
+        if (!m) continue;
+        const uint32_t attempt = j.attempt + 1;
+        if (!move(j, cfg::JOB_ASSIGNED, "dispatched to " + id + " (attempt " + std::to_string(attempt) + ")", id)) break;
+        send(*db.job(j.id), *m, attempt);
+        busy.insert(id);
+        break;
+      }
+    }
+  }
+
+  // On start-up: jobs the database says are out on mills get their
+  // configuration and assignment again (an edge ignores what it already ran).
+  void resume() {
+    for (auto s : {cfg::JOB_ASSIGNED, cfg::JOB_RUNNING}) {
+      for (const auto& j : db.jobs({.state = s, .with_documents = true})) {
+        const auto m = db.machine(j.machine_id);
+        if (!m || !j.plan) continue;
+        spdlog::info("job {}: resuming as {} on {}", j.id, store::state_name(j.state), j.machine_id);
+        send(j, *m, j.attempt);
+      }
+    }
+  }
+
+  // ------------------------------------------------------------- edges --
+
+  void take_edges() {
+    edge_reader.take([&](const smc_data_EdgeStatus& s, const tr::SampleInfo& info) {
+      const std::string id = get_string(s.machine_id);
+      auto it = mills.find(id);
+      if (it == mills.end()) return;
+      if (info.valid_data && info.instance_state == tr::InstanceState::kAlive) {
+        if (!it->second.alive) spdlog::info("edge {} is alive", id);
+        it->second.alive = true;
+        it->second.seen = true;
+        it->second.state = s.state;
+      } else if (info.instance_state != tr::InstanceState::kAlive && it->second.alive) {
+        spdlog::warn("edge {} lost (liveliness)", id);
+        it->second.alive = false;
+        it->second.lost_since = Clock::now();
+      }
+    });
+  }
+
+  void check_lost_edges() {
+    const auto now = Clock::now();
+    for (auto s : {cfg::JOB_ASSIGNED, cfg::JOB_RUNNING}) {
+      for (const auto& j : db.jobs({.state = s})) {
+        const Mill& m = mills[j.machine_id];
+        if (m.alive) continue;
+        const auto since = std::max(m.lost_since, started);
+        if (now - since < opt.edge_grace) continue;
+        interrupt(j, "edge " + j.machine_id + (m.seen ? " lost (liveliness)" : " not seen since the cell started"));
+      }
+    }
+  }
+
+  void interrupt(const store::Job& j, const std::string& why) {
+    if (!move(j, cfg::JOB_INTERRUPTED, why)) return;
+    withdraw(j.machine_id);
+    const auto now = *db.job(j.id);
+    if (now.attempt < opt.max_attempts) {
+      move(now, cfg::JOB_QUEUED, "re-queued after attempt " + std::to_string(now.attempt) + " of " +
+                                     std::to_string(opt.max_attempts));
+    } else {
+      move(now, cfg::JOB_FAILED, "interrupted on every one of " + std::to_string(opt.max_attempts) + " attempts");
+    }
+  }
+
+  // ---------------------------------------------------------- progress --
+
+  void take_progress() {
+    progress_reader.take([&](const smc_data_JobProgress& p, const tr::SampleInfo& info) {
+      if (!info.valid_data) return;
+      const std::string job_id = get_string(p.job_id);
+      auto j = db.job(job_id);
+      if (!j || j->machine_id != get_string(p.machine_id)) return;
+      Progress& pr = progress[job_id];
+      pr.pass_index = p.pass_index;
+      pr.pass_count = p.pass_count;
+      pr.fraction = p.fraction_done;
+      pr.chatter = std::max(pr.chatter, p.chatter_events);
+      pr.peak_force = p.peak_force_n;
+      const std::string msg = get_string(p.message);
+      switch (p.phase) {
+        case smc_data_JOB_RUNNING:
+          if (j->state == cfg::JOB_ASSIGNED) move(*j, cfg::JOB_RUNNING, "edge " + j->machine_id + ": " + msg);
+          else if (j->state == cfg::JOB_RUNNING) publish_status(*j, msg);
+          break;
+        case smc_data_JOB_DONE:
+          if (j->state == cfg::JOB_ASSIGNED) move(*j, cfg::JOB_RUNNING, "edge reported progress");
+          if (auto cur = db.job(job_id); cur && cur->state == cfg::JOB_RUNNING) {
+            cfg::RunSummary r;
+            r.set_config_id(config_id_for(*cur, cur->attempt));
+            r.set_variant(cur->variant);
+            r.set_completed(true);
+            r.set_passes_completed(p.pass_count);
+            r.set_depth_removed_mm(p.depth_removed_mm);
+            r.set_chatter_events(pr.chatter);
+            r.set_peak_force_n(p.peak_force_n);
+            r.set_cycle_time_s(static_cast<double>(p.machine_time_ns) * 1e-9);
+            if (cur->plan && cur->plan->program().passes_size() > 0) {
+              // F_ref = P_max / V, as the edge computes it (no safety factor set).
+              const auto& pl = *cur->plan;
+              const auto m = db.machine(cur->machine_id);
+              const double v = 2 * 3.141592653589793 * pl.operation().cutter_radius_mm() * 1e-3 *
+                               pl.program().passes(0).spindle_rpm() / 60.0;
+              const double sf = pl.operation().force_safety_factor() > 0 ? pl.operation().force_safety_factor() : 1;
+              const double ref = pl.operation().force_reference_n() > 0
+                                     ? pl.operation().force_reference_n()
+                                     : (m ? m->max_spindle_power_w : 0) / v / sf;
+              r.set_force_reference_n(ref);
+              if (ref > 0) r.set_overshoot_pct(100.0 * (static_cast<double>(p.peak_force_n) - ref) / ref);
+            }
+            db.record_result(job_id, r);
+            move(*db.job(job_id), cfg::JOB_DONE, "edge " + cur->machine_id + ": " + msg);
+            withdraw(cur->machine_id);
+            learn(*db.job(job_id));
+          }
+          break;
+        case smc_data_JOB_FAILED:
+          if (j->state == cfg::JOB_RUNNING || j->state == cfg::JOB_ASSIGNED) {
+            if (j->state == cfg::JOB_ASSIGNED) move(*j, cfg::JOB_RUNNING, "edge reported progress");
+            move(*db.job(job_id), cfg::JOB_FAILED, "edge " + j->machine_id + ": " + msg);
+            withdraw(j->machine_id);
+          }
+          break;
+        case smc_data_JOB_INTERRUPTED:
+          if (j->state == cfg::JOB_RUNNING || j->state == cfg::JOB_ASSIGNED) interrupt(*j, "edge " + j->machine_id + ": " + msg);
+          break;
+        case smc_data_JOB_ASSIGNED:
+          break;
+      }
+    });
+  }
+
+  void take_chatter() {
+    chatter_reader.take([&](const smc_data_ChatterEvent& e, const tr::SampleInfo& info) {
+      if (!info.valid_data || !chatter_seen.insert(e.event_id).second) return;
+      spdlog::warn("{}: chatter ({}) at {:.0f} Hz in job {}, program now {} passes",
+                   get_string(e.machine_id), e.source == smc_data_CHATTER_AUTOMATIC ? "automatic" : "operator",
+                   e.frequency_hz, get_string(e.job_id), e.new_pass_count);
+    });
+  }
+
+  // ---------------------------------------------------------- learning --
+
+  void take_summaries() {
+    summary_reader.take([&](const smc_data_ForceSummary& s, const tr::SampleInfo& info) {
+      if (!opt.learn || !info.valid_data || !s.in_contact || s.chatter) return;
+      if (!(s.f_y_peak_n > 0) || !(s.feed_per_tooth_mm > 0) || !(s.depth_mm > 0)) return;
+      // Settled revolutions only: the cutter fully in the part and the
+      // controller at its reference (entry, exit and transients mix the
+      // engagement into the force, which the model does not describe).
+      if (!(s.f_ref_n > 0) || std::fabs(s.f_y_peak_n - s.f_ref_n) > 0.1f * s.f_ref_n) return;
+      for (const auto& j : db.jobs({.state = cfg::JOB_RUNNING})) {
+        if (j.machine_id != get_string(s.machine_id) || j.variant != cfg::SMC_II) continue;
+        learning[j.id].push_back({s.depth_mm, s.feed_per_tooth_mm, s.f_y_peak_n});
+      }
+    });
+  }
+
+  // From an SMC II run's per-revolution data: a candidate force-process
+  // model (F_Y = K d^beta f^alpha) with its fit statistics, stored as not
+  // validated. Under force control F_Y sits at the reference, so only the
+  // trade-off between depth and feed is in the data: exponents it cannot
+  // identify (one depth; a narrow feed range) are held at the handbook values
+  // of the paper's eq. 1, and the note says so.
+  void learn(const store::Job& j) {
+    auto it = learning.find(j.id);
+    if (it == learning.end() || it->second.size() < 20) return;
+    const auto& samples = it->second;
+    double dmin = 1e9, dmax = 0, fmin = 1e9, fmax = 0;
+    for (const auto& s : samples) {
+      dmin = std::min(dmin, s.depth_mm);
+      dmax = std::max(dmax, s.depth_mm);
+      fmin = std::min(fmin, s.feed_mm_per_tooth);
+      fmax = std::max(fmax, s.feed_mm_per_tooth);
+    }
+    machining::FitOptions fo;
+    std::string note = "fitted from " + std::to_string(samples.size()) + " revolutions of job " + j.id;
+    if (dmax < 1.2 * dmin) {
+      fo.fixed_beta = 0.65;
+      note += "; beta held at 0.65 (one depth)";
+    }
+    if (fmax < 1.5 * fmin) {
+      fo.fixed_alpha = 0.63;
+      note += "; alpha held at 0.63 (feed range too narrow to identify it)";
+    }
+    try {
+      const auto fit = machining::fit_force_process(samples, fo);
+      store::ProcessModel pm;
+      pm.kind = store::ModelKind::kForceProcess;
+      pm.machine_id = j.machine_id;
+      pm.tool_id = j.spec.tool_id();
+      pm.material_id = db.part(j.spec.part_id())->material_id;
+      pm.part_id = j.spec.part_id();
+      pm.provenance = cfg::PROVENANCE_FITTED;
+      pm.validated = false;
+      pm.force = machining::to_proto(fit);
+      pm.fit = pm.force.fit();
+      pm.note = note;
+      const std::string id = db.add_model(pm);
+      spdlog::info("job {}: candidate force model {}: K={:.3f} kN beta={:.2f} alpha={:.2f}, R^2={:.3f} ({})",
+                   j.id, id, fit.k_kn, fit.beta, fit.alpha, fit.fit ? fit.fit->r_squared : 0.0, note);
+    } catch (const std::exception& e) {
+      spdlog::warn("job {}: no force model fitted: {}", j.id, e.what());
+    }
+    learning.erase(it);
+  }
+
+  // -------------------------------------------------------------- loop --
+
+  int run(const std::atomic<bool>& stop) {
+    spdlog::info("cell: database {} (schema {}), {} machines", opt.db_path, db.schema_version(), mills.size());
+    resume();
+    for (const auto& j : db.jobs({.with_documents = true})) publish_status(j, "current");
+    std::vector<int64_t> fired;
+    while (!stop.load()) {
+      waitset.wait(50ms, fired);
+      take_edges();
+      take_progress();
+      take_chatter();
+      take_summaries();
+      const int64_t v = db.data_version();
+      if (v != data_version || Clock::now() - last_scan > 1s) {
+        data_version = v;
+        last_scan = Clock::now();
+        for (const auto& j : db.jobs({.state = cfg::JOB_QUEUED})) {
+          if (!progress.count(j.id)) publish_status(j, "queued");
+        }
+        plan_queued();
+      }
+      check_lost_edges();
+      dispatch();
+    }
+    return 0;
+  }
+};
+
+CellService::CellService(ServiceOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+CellService::~CellService() = default;
+int CellService::run(const std::atomic<bool>& stop) { return impl_->run(stop); }
+
+}  // namespace smc::cell
