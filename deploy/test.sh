@@ -16,7 +16,7 @@ export CYCLONEDDS_URI="file://$PWD/deploy/cyclonedds/loopback.xml"
 start=$(date +%s)
 
 echo "== configure and build (release, -Werror)"
-cmake --preset release -DSMC_WERROR=ON >/dev/null
+cmake --preset release -DSMC_WERROR=ON -DSMC_BUILD_TESTS=ON -DSMC_BUILD_BENCHMARKS=ON >/dev/null
 cmake --build --preset release
 
 echo "== tests"

@@ -270,12 +270,13 @@ struct EdgeService::Impl {
       ro.priority = 0;
       ro.lock_memory = false;
     }
+    ro.overrun_threshold = opt.overrun_threshold;
     j->rt = std::make_unique<RealTimeEdge>(*j->core, ro, clock);
     started.insert(a.job_id() + "#" + std::to_string(a.attempt()));
     job = std::move(j);
     operator_inputs = OperatorInputs{};
     job->rt->push_operator_inputs(operator_inputs);
-    if (opt.speedup == 1.0) {
+    if (!paced()) {
       job->rt->start();
       spdlog::info("{}: real-time set-up: {}", opt.machine_id,
                    rt::summary(job->rt->setup_report(), ro));
@@ -323,8 +324,10 @@ struct EdgeService::Impl {
     job->last_progress = std::chrono::steady_clock::now();
   }
 
+  bool paced() const { return opt.paced || opt.speedup != 1.0; }
+
   bool job_running() const {
-    return opt.speedup == 1.0 ? job->rt->loop().running() : !job->paced_done.load();
+    return !paced() ? job->rt->loop().running() : !job->paced_done.load();
   }
 
   void stop_loop() {

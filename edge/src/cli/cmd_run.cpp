@@ -43,9 +43,18 @@ void add_run(CLI::App& app) {
                   "The simulated mill's own milling model (default: the configuration's)")
       ->check(CLI::ExistingFile);
   sub->add_flag("--no-realtime", *no_rt, "Do not ask for SCHED_FIFO and mlockall");
-  sub->callback([opt, lease_ms, no_rt] {
+  sub->add_flag("--paced", opt->paced,
+                "Run the simulated mill paced to the wall clock instead of in the real-time loop\n"
+                "(no deadlines, no overrun holds; implied by --speedup other than 1)");
+  auto overrun_ms = std::make_shared<double>(2.0);
+  sub->add_option("--overrun-ms", *overrun_ms,
+                  "A real-time tick this late is an overrun and holds the feed")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 1000.0));
+  sub->callback([opt, lease_ms, no_rt, overrun_ms] {
     opt->lease = std::chrono::milliseconds(*lease_ms);
     opt->realtime = !*no_rt;
+    opt->overrun_threshold = std::chrono::microseconds(static_cast<int64_t>(*overrun_ms * 1000));
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     EdgeService service(*opt);

@@ -31,7 +31,13 @@ struct ServiceOptions {
   std::chrono::milliseconds lease{2000};     // liveliness lease of smc_edge_status
   int batch_decimation = 1;                  // raw force: every n-th sample
   double speedup = 1.0;                      // machine seconds per wall second
+  // Paced simulation instead of the real-time loop: a plain thread keeps
+  // machine time at `speedup` x wall time and catches up after a delay
+  // (no deadlines, so no overrun holds). Always so when speedup != 1.
+  bool paced = false;
   bool realtime = true;                      // SCHED_FIFO, mlockall when permitted
+  // A tick this late is an overrun, which holds the feed (real-time loop).
+  std::chrono::microseconds overrun_threshold{2000};
   std::string mill_model_file;               // the mill's own model; default: the config's
 };
 
