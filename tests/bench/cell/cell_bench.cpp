@@ -1,0 +1,152 @@
+// Cell benchmarks:
+//   1. SMC I planning time per job (critical depth by time-domain simulation),
+//      beside the time of one 1 s time-domain simulation of the same cut
+//      measured in the same run (the planner's cost in "simulated cuts").
+//   2. Configuration delivery to N edges (default 20 smc-edge processes on
+//      loopback): time from publishing each edge's SupervisorConfig until
+//      every edge reports it in force, beside the same for one edge.
+//
+//   build/release/bin/smc-bench-cell [--edges N] [--plans N]
+
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "child_process.hpp"
+#include "smc/cell/planner.hpp"
+#include "smc/cell/store/seed.hpp"
+#include "smc/cell/store/store.hpp"
+#include "smc/documents/load.hpp"
+#include "smc/machining/model_proto.hpp"
+#include "smc/machining/tds.hpp"
+#include "smc/transport/document.hpp"
+#include "smc/transport/participant.hpp"
+#include "smc/wire/topics.hpp"
+#include "smc_config.pb.h"
+
+using Clock = std::chrono::steady_clock;
+namespace store = smc::cell::store;
+namespace tr = smc::transport;
+
+namespace {
+
+std::string src(const std::string& rel) { return std::string(SMC_SOURCE_DIR) + "/" + rel; }
+double secs(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+void bench_planning(int plans) {
+  const auto dir = std::filesystem::temp_directory_path() / ("smc-bench-plan-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  auto db = store::Store::open((dir / "cell.db").string());
+  store::seed_demo(db, {store::default_models_dir()});
+  smc::config::SupervisorConfig defaults;
+  smc::documents::load(src("cell/configs/defaults.textproto"), defaults);
+  smc::cell::Planner planner(src("cell/grafcets"), defaults);
+  smc::config::Job spec;
+  spec.set_part_id("bracket-tl");
+  const auto job = db.submit_job(spec);
+  const auto part = *db.part(job.spec.part_id());
+  const auto tool = *db.tool(job.spec.tool_id());
+  smc::cell::PlanInputs in{job, part, tool, db.find_models("mill-1", tool.id, part.material_id, part.id)};
+  const auto sel = smc::cell::select_variant(in);
+  double total = 0, crit = 0;
+  for (int i = 0; i < plans; ++i) {
+    const auto p = planner.plan(in, sel);
+    total += p.planning_s;
+    crit = p.critical_depth_mm;
+  }
+  // Baseline: one second of the same cut, simulated once.
+  const auto model = smc::machining::from_proto(sel.milling->milling);
+  smc::machining::CutConditions cut;
+  cut.spindle_rpm = job.spec.spindle_rpm();
+  cut.depth_mm = 1.0;
+  cut.feed_per_tooth_mm = job.spec.feedrate_mm_s() / (tool.teeth * cut.spindle_rpm / 60.0);
+  smc::machining::BatchOptions bo;
+  bo.duration_s = 1.0;
+  const auto t0 = Clock::now();
+  (void)smc::machining::simulate(model, cut, bo);
+  const double one = secs(Clock::now() - t0);
+  std::printf("SMC I planning (%s): %.3f s per job (critical depth %.3f mm), %d jobs\n",
+              std::string(store::variant_name(sel.variant)).c_str(), total / plans, crit, plans);
+  std::printf("  baseline: 1 s of the cut simulated in %.3f s; planning = %.1f x that\n", one,
+              total / plans / one);
+  std::filesystem::remove_all(dir);
+}
+
+// Starts n edges, then publishes a configuration to each and waits until all
+// report it in force. Returns seconds.
+double deliver(int n, const std::string& partition, bool print) {
+  std::vector<std::unique_ptr<smc::test::ChildProcess>> edges;
+  for (int i = 1; i <= n; ++i) {
+    edges.push_back(std::make_unique<smc::test::ChildProcess>(std::vector<std::string>{
+        smc::test::bin_path("smc-edge"), "--log-level", "warn", "run", "--machine",
+        "mill-" + std::to_string(i), "--partition", partition, "--paced", "--no-realtime",
+        "--mill-model", src("cell/models/paper_face_mill.textproto")}));
+  }
+  tr::Participant p({.partition = partition});
+  tr::Topic<smc_data_Envelope> topic(p, smc::wire::kConfigTopic);
+  tr::DocumentWriter writer(topic, {"smc.config.SupervisorConfig", 1});
+  tr::Topic<smc_data_EdgeStatus> st_topic(p);
+  tr::Reader<smc_data_EdgeStatus> status(st_topic);
+  // Every edge up (its status seen) before the clock starts.
+  std::map<std::string, std::string> msg;
+  const auto up_deadline = Clock::now() + std::chrono::seconds(60);
+  while (static_cast<int>(msg.size()) < n && Clock::now() < up_deadline) {
+    status.take([&](const smc_data_EdgeStatus& s, const tr::SampleInfo& i) {
+      if (i.valid_data) msg[smc::wire::get_string(s.machine_id)] = smc::wire::get_string(s.message);
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  writer.writer().wait_for_readers(static_cast<uint32_t>(n), std::chrono::seconds(30));
+  auto cfg = smc::documents::load_supervisor_config(src("edge/configs/smc2.textproto"));
+  const auto t0 = Clock::now();
+  for (int i = 1; i <= n; ++i) {
+    cfg.set_config_id("bench-" + std::to_string(i));
+    cfg.mutable_machine()->set_machine_id("mill-" + std::to_string(i));
+    writer.publish("mill-" + std::to_string(i), cfg.config_id(), cfg);
+  }
+  int in_force = 0;
+  std::map<std::string, bool> done;
+  const auto deadline = Clock::now() + std::chrono::seconds(60);
+  while (in_force < n && Clock::now() < deadline) {
+    status.take([&](const smc_data_EdgeStatus& s, const tr::SampleInfo& i) {
+      if (!i.valid_data) return;
+      const std::string id = smc::wire::get_string(s.machine_id);
+      if (!done[id] && smc::wire::get_string(s.message).find("in force") != std::string::npos) {
+        done[id] = true;
+        ++in_force;
+      }
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  const double t = secs(Clock::now() - t0);
+  if (print && in_force < n) std::printf("  only %d of %d edges confirmed\n", in_force, n);
+  return in_force == n ? t : -1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int edges = 20, plans = 3;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (std::strcmp(argv[i], "--edges") == 0) edges = std::atoi(argv[i + 1]);
+    if (std::strcmp(argv[i], "--plans") == 0) plans = std::atoi(argv[i + 1]);
+  }
+  if (std::getenv("CYCLONEDDS_URI") == nullptr) {
+    ::setenv("CYCLONEDDS_URI", ("file://" + src("deploy/cyclonedds/loopback.xml")).c_str(), 1);
+  }
+  bench_planning(plans);
+  const double one = deliver(1, smc::test::unique_partition("deliver1"), true);
+  const double many = deliver(edges, smc::test::unique_partition("deliverN"), true);
+  std::printf("configuration delivery (checked and in force): 1 edge %.0f ms; %d edges %.0f ms "
+              "(%.1f x one edge)\n",
+              1000 * one, edges, 1000 * many, many / one);
+  return 0;
+}
