@@ -223,6 +223,7 @@ void EdgeCore::tick(bool overrun) noexcept {
         if (drive_.rewrite(program_, current_pass_) != Status::kOk) {
           raise_fault(Fault::kDriveError, -1, 0);
         }
+        programs_.try_push(program_);
         emit(EventKind::kProgramRewritten);
       }
     }

@@ -59,6 +59,11 @@ struct RunningJob {
   std::unique_ptr<SimulatedMill> mill;
   std::unique_ptr<EdgeCore> core;
   std::unique_ptr<RealTimeEdge> rt;
+  // What the comms thread knows of the loop, only from the core's rings (the
+  // core itself belongs to the loop thread).
+  RevolutionRecord latest{};
+  FixedProgram program;
+  bool done = false;
   uint32_t sequence = 0;
   uint32_t chatter_events = 0;
   double peak_force_n = 0;
@@ -144,7 +149,7 @@ struct EdgeService::Impl {
   void publish_status() {
     smc_data_EdgeStatus st{};
     set_string(st.machine_id, opt.machine_id);
-    st.machine_time_ns = job ? machine_ns(job->core->drive_sample().force.t_s) : 0;
+    st.machine_time_ns = job ? machine_ns(job->latest.t_s) : 0;
     st.state = state;
     set_string(st.config_id, config ? config->config_id() : "");
     set_string(st.job_id, job ? job->assignment.job_id() : "");
@@ -263,6 +268,7 @@ struct EdgeService::Impl {
     j->core = std::make_unique<EdgeCore>(ec, *j->mill);
     j->core->set_batch_decimation(opt.batch_decimation);
     j->core->start();
+    j->program = ec.program;
     rt::RtOptions ro;
     ro.period = std::chrono::nanoseconds(
         static_cast<int64_t>(ec.params.sample_period_s * 1e9 / std::max(opt.speedup, 1e-3)));
@@ -304,18 +310,18 @@ struct EdgeService::Impl {
 
   void publish_progress(smc_data_JobPhase phase, const std::string& why) {
     if (!job) return;
-    const EdgeCore& c = *job->core;
+    const FixedProgram& prog = job->program;
     smc_data_JobProgress p{};
     set_string(p.machine_id, opt.machine_id);
     set_string(p.job_id, job->assignment.job_id());
-    p.machine_time_ns = machine_ns(c.drive_sample().force.t_s);
+    p.machine_time_ns = machine_ns(job->latest.t_s);
     p.sequence_number = ++job->sequence;
     p.phase = phase;
-    p.pass_index = static_cast<uint16_t>(c.drive_sample().pass_index);
-    p.pass_count = c.program().count;
-    const double total = c.program().total_depth_mm();
-    const int pass = c.drive_sample().pass_index;
-    p.depth_removed_mm = static_cast<float>(c.done() ? total : c.program().depth_before(pass));
+    p.pass_index = static_cast<uint16_t>(job->latest.pass_index);
+    p.pass_count = prog.count;
+    const double total = prog.total_depth_mm();
+    const int pass = job->latest.pass_index;
+    p.depth_removed_mm = static_cast<float>(job->done ? total : prog.depth_before(pass));
     p.fraction_done = static_cast<float>(total > 0 ? static_cast<double>(p.depth_removed_mm) / total : 0.0);
     p.chatter_events = job->chatter_events;
     p.peak_force_n = static_cast<float>(job->peak_force_n);
@@ -341,11 +347,12 @@ struct EdgeService::Impl {
   void finish_job() {
     stop_loop();
     drain();  // whatever the loop produced last
+    job->done = job->done || job->core->done();  // the loop has stopped: safe to look
     if (pending_chatter) {
       chatter_writer.write(*pending_chatter);
       pending_chatter.reset();
     }
-    const bool ok = job->core->done();
+    const bool ok = job->done;
     publish_progress(ok ? smc_data_JOB_DONE : smc_data_JOB_FAILED,
                      ok ? "program complete" : "stopped before the end");
     spdlog::info("{}: job {} {}", opt.machine_id, job->assignment.job_id(), ok ? "done" : "failed");
@@ -393,6 +400,8 @@ struct EdgeService::Impl {
     if (!job) return;
     EdgeCore& c = *job->core;
     EdgeEvent e;
+    FixedProgram prog;
+    while (c.programs().try_pop(prog)) job->program = prog;
     while (c.events().try_pop(e)) on_event(e);
     // No rewrite follows when the configuration has no suppressor, or the
     // program is full: publish the event as it is.
@@ -402,6 +411,7 @@ struct EdgeService::Impl {
     }
     RevolutionRecord r;
     while (c.revolutions().try_pop(r)) {
+      job->latest = r;
       smc_data_ForceSummary s{};
       set_string(s.machine_id, opt.machine_id);
       s.machine_time_ns = machine_ns(r.t_s);
@@ -473,9 +483,12 @@ struct EdgeService::Impl {
         break;
       }
       case EventKind::kProgramRewritten: {
+        // The core pushes the program before the event, so it is there now.
+        FixedProgram latest;
+        while (job->core->programs().try_pop(latest)) job->program = latest;
         smc::config::PartProgram prog = job->config.program();
         prog.clear_passes();
-        const FixedProgram& fp = job->core->program();
+        const FixedProgram& fp = job->program;
         for (int i = 0; i < fp.count; ++i) {
           auto* p = prog.add_passes();
           p->set_depth_mm(fp.passes[static_cast<size_t>(i)].depth_mm);
@@ -508,6 +521,7 @@ struct EdgeService::Impl {
                                                    std::to_string(e.pass_index + 1));
         break;
       case EventKind::kProgramDone:
+        job->done = true;
         break;
     }
   }
@@ -522,7 +536,7 @@ struct EdgeService::Impl {
       take_jobs();
       drain();
       if (job) {
-        if (job->core->done() || !job_running()) {
+        if (job->done || !job_running()) {
           finish_job();
         } else if (std::chrono::steady_clock::now() - job->last_progress > 1s) {
           publish_progress(smc_data_JOB_RUNNING, "running");

@@ -142,6 +142,8 @@ class EdgeCore {
   rt::SpscRing<EdgeEvent, 1024>& events() noexcept { return events_; }
   rt::SpscRing<RevolutionRecord, 256>& revolutions() noexcept { return revolutions_; }
   rt::SpscRing<ForceBatchRecord, 16>& batches() noexcept { return batches_; }
+  // The program after every rewrite (module F), for the comms side.
+  rt::SpscRing<FixedProgram, 4>& programs() noexcept { return programs_; }
 
  private:
   void raise_fault(Fault f, int module, double value) noexcept;
@@ -178,6 +180,7 @@ class EdgeCore {
   rt::SpscRing<EdgeEvent, 1024> events_;
   rt::SpscRing<RevolutionRecord, 256> revolutions_;
   rt::SpscRing<ForceBatchRecord, 16> batches_;
+  rt::SpscRing<FixedProgram, 4> programs_;
 };
 
 }  // namespace smc::edge
