@@ -181,6 +181,10 @@ TEST_F(Cell, KilledEdgeInterruptsItsJobWhichIsRequeued) {
   const double detect_s = std::chrono::duration<double>(Clock::now() - t_kill).count();
   // Lease 1 s + grace 1.5 s + polling: within 5 s.
   EXPECT_LT(detect_s, 5.0);
+  // Interrupted, then re-queued (and planned again, waiting for a mill).
+  ASSERT_TRUE(wait_jobs({js}, [](const store::Job& j) {
+    return j.state == cfg::JOB_QUEUED || j.state == cfg::JOB_PLANNED;
+  }, 10s));
   const auto ev = events(js);
   EXPECT_EQ(count_to(ev, cfg::JOB_INTERRUPTED), 1);
   EXPECT_EQ(count_to(ev, cfg::JOB_QUEUED), 2) << "submitted, then re-queued";
