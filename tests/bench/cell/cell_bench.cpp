@@ -5,10 +5,13 @@
 //   2. Configuration delivery to N edges (default 20 smc-edge processes on
 //      loopback): time from publishing each edge's SupervisorConfig until
 //      every edge reports it in force, beside the same for one edge.
+//   3. The cell service's CPU while N edges run jobs and stream telemetry,
+//      beside its idle CPU over the same window.
 //
-//   build/release/bin/smc-bench-cell [--edges N] [--plans N]
+//   build/release/bin/smc-bench-cell [--edges N] [--plans N] [--window-s S]
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -131,11 +134,102 @@ double deliver(int n, const std::string& partition, bool print) {
   return in_force == n ? t : -1;
 }
 
+// CPU seconds (user + system) a process has used so far.
+double cpu_seconds(pid_t pid) {
+  std::FILE* f = std::fopen(("/proc/" + std::to_string(pid) + "/stat").c_str(), "r");
+  if (f == nullptr) return -1;
+  char buf[2048];
+  const size_t n = std::fread(buf, 1, sizeof buf - 1, f);
+  std::fclose(f);
+  buf[n] = '\0';
+  // Fields after the command name: state is field 3; utime 14, stime 15.
+  const char* p = std::strrchr(buf, ')');
+  if (p == nullptr) return -1;
+  unsigned long long utime = 0, stime = 0;
+  int field = 2;
+  for (const char* c = p + 1; *c != '\0'; ++c) {
+    if (*c == ' ') {
+      ++field;
+      if (field == 14) utime = std::strtoull(c + 1, nullptr, 10);
+      if (field == 15) {
+        stime = std::strtoull(c + 1, nullptr, 10);
+        break;
+      }
+    }
+  }
+  return static_cast<double>(utime + stime) / static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
+
+// The cell service's CPU while `n` edge processes run jobs and stream their
+// telemetry at real speed, beside its CPU over the same window with no edge.
+void bench_stream(int n, double window_s) {
+  const auto dir = std::filesystem::temp_directory_path() / ("smc-bench-stream-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string db_path = (dir / "cell.db").string();
+  {
+    auto db = store::Store::open(db_path);
+    store::seed_demo(db, {store::default_models_dir()});
+    const auto proto = *db.machine("mill-1");
+    for (int i = 3; i <= n; ++i) {
+      store::Machine m = proto;
+      m.id = "mill-" + std::to_string(i);
+      m.name = m.id;
+      db.put_machine(m);
+    }
+  }
+  const std::string partition = smc::test::unique_partition("stream");
+  smc::test::ChildProcess cell({smc::test::bin_path("smc-cell"), "--log-level", "warn", "serve",
+                                "--db", db_path, "--partition", partition});
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  const double idle0 = cpu_seconds(cell.pid());
+  std::this_thread::sleep_for(std::chrono::duration<double>(window_s));
+  const double idle = cpu_seconds(cell.pid()) - idle0;
+  std::vector<std::unique_ptr<smc::test::ChildProcess>> edges;
+  for (int i = 1; i <= n; ++i) {
+    edges.push_back(std::make_unique<smc::test::ChildProcess>(std::vector<std::string>{
+        smc::test::bin_path("smc-edge"), "--log-level", "warn", "run", "--machine",
+        "mill-" + std::to_string(i), "--partition", partition, "--paced", "--no-realtime",
+        "--mill-model", src("cell/models/paper_face_mill.textproto")}));
+  }
+  {
+    auto db = store::Store::open(db_path, store::OpenMode::kExisting);
+    smc::config::Job spec;
+    spec.set_part_id("housing-js");  // SMC II: the cell also collects data to learn from
+    for (int i = 0; i < n; ++i) db.submit_job(spec);
+  }
+  // Until every job runs, then the measured window.
+  const auto deadline = Clock::now() + std::chrono::seconds(60);
+  for (;;) {
+    auto db = store::Store::open(db_path, store::OpenMode::kExisting);
+    if (static_cast<int>(db.jobs({.state = smc::config::JOB_RUNNING}).size()) == n) break;
+    if (Clock::now() > deadline) {
+      std::printf("  not every job started within 60 s\n");
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  double edges0 = 0;
+  for (auto& e : edges) edges0 += cpu_seconds(e->pid());
+  const double busy0 = cpu_seconds(cell.pid());
+  std::this_thread::sleep_for(std::chrono::duration<double>(window_s));
+  const double busy = cpu_seconds(cell.pid()) - busy0;
+  double edges1 = 0;
+  for (auto& e : edges) edges1 += cpu_seconds(e->pid());
+  std::printf("cell CPU with %d edges streaming (each a job at real speed: ~25 force summaries and "
+              "raw batches/s): %.1f %% of one core; idle: %.1f %%; one edge's own CPU: %.1f %%\n",
+              n, 100 * busy / window_s, 100 * idle / window_s,
+              100 * (edges1 - edges0) / n / window_s);
+  edges.clear();
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   int edges = 20, plans = 3;
+  double window_s = 10;
   for (int i = 1; i + 1 < argc; i += 2) {
+    if (std::strcmp(argv[i], "--window-s") == 0) window_s = std::atof(argv[i + 1]);
     if (std::strcmp(argv[i], "--edges") == 0) edges = std::atoi(argv[i + 1]);
     if (std::strcmp(argv[i], "--plans") == 0) plans = std::atoi(argv[i + 1]);
   }
@@ -148,5 +242,6 @@ int main(int argc, char** argv) {
   std::printf("configuration delivery (checked and in force): 1 edge %.0f ms; %d edges %.0f ms "
               "(%.1f x one edge)\n",
               1000 * one, edges, 1000 * many, many / one);
+  bench_stream(edges, window_s);
   return 0;
 }
