@@ -1,0 +1,263 @@
+#pragma once
+// The integration core shared by the stepping simulator and the batch runs
+// (internal). One internal step of length h:
+//
+//   1. predict the relative displacement u = tool - part at the step's
+//      middle (exact half-step of the modes, force held at the previous
+//      step's value),
+//   2. read u one delay earlier from the history of mid-step values (linear
+//      interpolation between stored steps) and store the new one,
+//   3. every tooth whose tip is over material cuts the chip
+//        h_i = f_t cos(theta_i) + (u_mid - u_delayed) . (cos theta_i, sin theta_i)
+//      clipped at zero, with its angle at the step's middle,
+//   4. the force sum is held over the step and the modes advance exactly.
+//
+// Evaluating the force at the middle of the step makes the scheme second
+// order in h for smooth forcing (first order only at the instants a tooth
+// enters or leaves the material). Nothing here allocates after construction.
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "fast_pow.hpp"
+#include "smc/machining/cutting.hpp"
+#include "smc/machining/model.hpp"
+#include "smc/machining/structure.hpp"
+
+namespace smc::machining::detail {
+
+struct StepForces {
+  double fx_n = 0, fy_n = 0, fz_n = 0;
+  double tangential_sum_n = 0;  // sum of F_t (power = this x V)
+  int teeth_cutting = 0;
+  bool jumped_out = false;  // a tooth with nominal chip >= f_t / 2 cut nothing
+};
+
+class CutEngine {
+ public:
+  // history_capacity: number of mid-step values kept (> longest delay in steps
+  // + 2); rounded up to a power of two.
+  CutEngine(const MillingModel& model, double step_s, std::size_t history_capacity)
+      : structure_(model.structure, step_s),
+        history_(2 * std::bit_ceil(history_capacity), 0.0),
+        capacity_(static_cast<std::int64_t>(std::bit_ceil(history_capacity))),
+        mask_(capacity_ - 1),
+        radius_mm_(model.cutter.radius_mm),
+        length_mm_(model.workpiece.length_mm),
+        band_lo_mm_(model.workpiece.offset_mm - model.workpiece.width_mm / 2),
+        band_hi_mm_(model.workpiece.offset_mm + model.workpiece.width_mm / 2),
+        sense_(rotation_sense(model.workpiece)),
+        sense_d_(sense_),
+        law_(model.law),
+        pow_(feed_power(model.law, true), feed_power(model.law, false)) {
+    const double lead = model.cutter.lead_angle_deg * 3.14159265358979323846 / 180.0;
+    cos_lead_ = std::cos(lead);
+    sin_lead_ = std::sin(lead);
+  }
+
+  StructureModel& structure() noexcept { return structure_; }
+  const StructureModel& structure() const noexcept { return structure_; }
+  int sense() const noexcept { return sense_; }
+  double radius_mm() const noexcept { return radius_mm_; }
+  std::int64_t history_capacity() const noexcept { return capacity_; }
+
+  // Precomputes the force-law coefficients for a cut (pow calls: once per
+  // sample, not per step). Real-time safe.
+  void set_operating_point(double spindle_rpm, double feed_per_tooth_mm, double depth_mm) noexcept {
+    feed_mm_ = feed_per_tooth_mm;
+    half_feed_mm_ = 0.5 * feed_per_tooth_mm;
+    active_ = spindle_rpm > 0 && depth_mm > 0;
+    const double v_m_min = cutting_speed_m_per_min(radius_mm_, spindle_rpm);
+    if (const auto* p = std::get_if<PowerLaw>(&law_)) {
+      power_law_ = true;
+      const double vs = v_m_min / 1000.0;
+      ct_ = active_ ? 1000.0 * p->cutting.coefficient_kn_per_mm2 *
+                          std::pow(depth_mm, 1.0 + p->cutting.depth_exponent) *
+                          std::pow(vs, p->cutting.speed_exponent)
+                    : 0.0;
+      cn_ = active_ ? 1000.0 * p->thrust.coefficient_kn_per_mm2 *
+                          std::pow(depth_mm, 1.0 + p->thrust.depth_exponent) *
+                          std::pow(vs, p->thrust.speed_exponent)
+                    : 0.0;
+      et_ = 1.0 + p->cutting.feed_exponent;
+      en_ = 1.0 + p->thrust.feed_exponent;
+      ca_ = 0;
+    } else {
+      const auto& l = std::get<LinearLaw>(law_);
+      power_law_ = false;
+      ct_ = l.k_t_n_per_mm2 * depth_mm;
+      cn_ = l.k_n_n_per_mm2 * depth_mm;
+      ca_ = l.k_a_n_per_mm2 * depth_mm;
+      et_ = en_ = 1.0;
+    }
+  }
+
+  // Forces of the teeth for displacement change (dux, duy) since one delay
+  // earlier; cos_t/sin_t: each tooth's angle; tool_x_mm: cutter axis along
+  // the feed (checked against the part's length unless check_length is false).
+  //
+  // half_sweep_rad: half the angle a tooth turns during the step. A tooth
+  // whose tip crosses an edge of the part's width band during the step cuts
+  // for the fraction of the step it is over the band (its y is taken as
+  // linear in time over the step), so that the time in cut, and with it the
+  // impulse of an interrupted cut, is exact to second order rather than
+  // quantised to whole steps. 0: the indicator at the instant.
+  StepForces tooth_forces(const double* cos_t, const double* sin_t, int teeth, double tool_x_mm,
+                          bool check_length, double dux, double duy,
+                          double half_sweep_rad = 0) const noexcept {
+    StepForces f;
+    if (!active_) return f;
+    for (int i = 0; i < teeth; ++i) {
+      const double c = cos_t[i];
+      if (c <= 0) continue;  // trailing half: that material is gone
+      const double s = sin_t[i];
+      const double y = radius_mm_ * s;
+      double weight = 1.0;
+      const double dy = radius_mm_ * c * half_sweep_rad;  // y's change over half the step
+      if (y - dy < band_lo_mm_ || y + dy > band_hi_mm_) {
+        if (dy > 0) {
+          const double overlap = std::min(y + dy, band_hi_mm_) - std::max(y - dy, band_lo_mm_);
+          if (overlap <= 0) continue;
+          weight = std::min(1.0, overlap / (2 * dy));
+        } else if (y < band_lo_mm_ || y > band_hi_mm_) {
+          continue;
+        }
+      }
+      if (check_length) {
+        const double xt = tool_x_mm + radius_mm_ * c;
+        if (xt < 0 || xt > length_mm_) continue;
+      }
+      const double nominal = feed_mm_ * c;
+      const double chip = nominal + dux * c + duy * s;
+      if (chip <= 0) {
+        if (nominal >= half_feed_mm_ && feed_mm_ > 0) f.jumped_out = true;
+        continue;
+      }
+      double ft, fn;
+      if (power_law_) {
+        pow_(chip, ft, fn);  // chip^et, chip^en
+        ft *= ct_;
+        fn *= cn_;
+      } else {
+        ft = ct_ * chip;
+        fn = cn_ * chip;
+      }
+      ft *= weight;
+      fn *= weight;
+      const double fr = fn * cos_lead_;
+      const double st = sense_d_ * ft;
+      f.fx_n += -fr * c + st * s;
+      f.fy_n += -fr * s - st * c;
+      f.fz_n += fn * sin_lead_ + weight * ca_ * chip;
+      f.tangential_sum_n += ft;
+      ++f.teeth_cutting;
+    }
+    return f;
+  }
+
+  // Relative displacement at fractional mid-step index `pos` (0 before the
+  // history starts: the structure was at rest).
+  void delayed(double pos, double& ux, double& uy) const noexcept {
+    if (!(pos > -1.0)) {
+      ux = uy = 0;
+      return;
+    }
+    // floor() without a libm call: truncation is floor for pos >= 0.
+    const std::int64_t i0 = pos >= 0 ? static_cast<std::int64_t>(pos) : -1;
+    const double a = pos - static_cast<double>(i0);
+    double x0 = 0, y0 = 0;
+    if (i0 >= 0) {
+      const auto j = static_cast<std::size_t>(i0 & mask_) * 2;
+      x0 = history_[j];
+      y0 = history_[j + 1];
+    }
+    const auto j1 = static_cast<std::size_t>((i0 + 1) & mask_) * 2;
+    const double x1 = history_[j1];
+    const double y1 = history_[j1 + 1];
+    ux = x0 + a * (x1 - x0);
+    uy = y0 + a * (y1 - y0);
+  }
+
+  // One internal step (see the top of this file). delay_steps: the delay in
+  // internal steps (<= capacity - 2).
+  // regenerative = false: the chip is the nominal one (the history is still
+  // recorded), for running a cut onto its chatter-free periodic motion.
+  // half_sweep_rad: see tooth_forces().
+  StepForces step(const double* cos_mid, const double* sin_mid, int teeth, double tool_x_mid_mm,
+                  bool check_length, double delay_steps, double half_sweep_rad,
+                  bool regenerative = true) noexcept {
+    double mx, my;
+    structure_.predict_half_step(prev_fx_, prev_fy_, mx, my);
+    double dx = mx, dy = my;
+    if (regenerative) delayed(static_cast<double>(count_) - delay_steps, dx, dy);
+    const auto slot = static_cast<std::size_t>(count_ & mask_) * 2;
+    history_[slot] = mx;
+    history_[slot + 1] = my;
+    ++count_;
+    const StepForces f = tooth_forces(cos_mid, sin_mid, teeth, tool_x_mid_mm, check_length, mx - dx,
+                                      my - dy, half_sweep_rad);
+    structure_.step(f.fx_n, f.fy_n);
+    prev_fx_ = f.fx_n;
+    prev_fy_ = f.fy_n;
+    return f;
+  }
+
+  // Forces at the current instant (the end of the last step), for sampled
+  // outputs: exact displacement now, delayed value interpolated.
+  StepForces forces_now(const double* cos_t, const double* sin_t, int teeth, double tool_x_mm,
+                        bool check_length, double delay_steps) const noexcept {
+    double ux, uy;
+    structure_.relative(ux, uy);
+    double dx, dy;
+    delayed(static_cast<double>(count_) - 0.5 - delay_steps, dx, dy);
+    return tooth_forces(cos_t, sin_t, teeth, tool_x_mm, check_length, ux - dx, uy - dy);
+  }
+
+  // 1 + feed exponent of the cutting (or thrust) pressure: the power of the
+  // chip in the force.
+  static double feed_power(const CuttingLaw& law, bool cutting) noexcept {
+    if (const auto* p = std::get_if<PowerLaw>(&law)) {
+      return 1.0 + (cutting ? p->cutting.feed_exponent : p->thrust.feed_exponent);
+    }
+    return 1.0;
+  }
+
+  void set_previous_force(double fx_n, double fy_n) noexcept {
+    prev_fx_ = fx_n;
+    prev_fy_ = fy_n;
+  }
+
+  void clear_history() noexcept {
+    for (auto& v : history_) v = 0;
+    count_ = 0;
+  }
+  void reset() noexcept {
+    structure_.reset();
+    clear_history();
+    prev_fx_ = prev_fy_ = 0;
+  }
+
+ private:
+  StructureModel structure_;
+  std::vector<double> history_;  // x, y pairs; a power-of-two ring
+  std::int64_t capacity_;
+  std::int64_t mask_;
+  std::int64_t count_ = 0;
+  double prev_fx_ = 0, prev_fy_ = 0;
+
+  double radius_mm_, length_mm_, band_lo_mm_, band_hi_mm_;
+  int sense_;
+  double sense_d_;
+  CuttingLaw law_;
+  PowPair pow_;
+  double cos_lead_ = 1, sin_lead_ = 0;
+
+  bool active_ = false;
+  bool power_law_ = true;
+  double feed_mm_ = 0, half_feed_mm_ = 0;
+  double ct_ = 0, cn_ = 0, ca_ = 0, et_ = 1, en_ = 1;
+};
+
+}  // namespace smc::machining::detail
