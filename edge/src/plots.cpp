@@ -1,6 +1,9 @@
 #include "plots.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
 #include <cstdio>
 #include <filesystem>
 
@@ -24,38 +27,68 @@ const char* variant_name(int v) {
   }
 }
 
-// Pass starts, feed holds, chatter and rewrites as labelled vertical lines.
-void add_marks(plot::Figure& fig, const RunResult& run) {
-  for (const EdgeEvent& e : run.events) {
+// Pass starts, feed holds, chatter and rewrites as vertical lines. Labels
+// closer than `min_gap` (machine seconds) to the previous label are left off
+// so that they do not print over each other; the line is still drawn.
+void add_marks(plot::Figure& fig, const RunResult& run, double min_gap) {
+  struct Mark {
+    double t;
+    std::string label;
+    const char* color;
+    int priority;  // lower places its label first
+  };
+  std::vector<Mark> marks;
+  for (size_t i = 0; i < run.events.size(); ++i) {
+    const EdgeEvent& e = run.events[i];
     char label[64];
     switch (e.kind) {
       case EventKind::kPassStarted:
-        std::snprintf(label, sizeof label, "pass %d", e.pass_index + 1);
-        fig.add_vertical(e.t_s, label).color = "#999999";
+        std::snprintf(label, sizeof label, "pass %d/%d", e.pass_index + 1, e.pass_count);
+        marks.push_back({e.t_s, label, "#999999", 2});
         break;
       case EventKind::kChatterDetected:
-        fig.add_vertical(e.t_s, "chatter").color = "#D55E00";
+      case EventKind::kChatterSignalled: {
+        std::string l = e.kind == EventKind::kChatterDetected ? "chatter" : "chatter (operator)";
+        // The rewrite follows within a fast period: one mark says both.
+        for (size_t k = i + 1; k < run.events.size() && run.events[k].t_s < e.t_s + 0.2; ++k) {
+          if (run.events[k].kind == EventKind::kProgramRewritten) {
+            l += ": " + std::to_string(run.events[k].pass_count) + " passes";
+          }
+        }
+        marks.push_back({e.t_s, l, "#D55E00", 0});
         break;
-      case EventKind::kChatterSignalled:
-        fig.add_vertical(e.t_s, "chatter (operator)").color = "#D55E00";
-        break;
-      case EventKind::kProgramRewritten:
-        std::snprintf(label, sizeof label, "rewrite: %d passes", e.pass_count);
-        fig.add_vertical(e.t_s, label).color = "#CC79A7";
-        break;
+      }
       case EventKind::kFault:
-        fig.add_vertical(e.t_s, std::string("fault: ") + to_string(e.fault)).color = "#000000";
+        marks.push_back({e.t_s, std::string("fault: ") + to_string(e.fault), "#000000", 0});
         break;
       default:
         break;
     }
   }
-  // Feed holds from module C's activity.
   bool held = false;
   for (const RevolutionRecord& r : run.revolutions) {
     const bool now = (r.active & bit(ModuleId::C)) != 0;
-    if (now != held) fig.add_vertical(r.t_s, now ? "feed hold" : "release").color = "#0072B2";
+    if (now != held) marks.push_back({r.t_s, now ? "hold" : "release", "#0072B2", 1});
     held = now;
+  }
+  // Labels by priority (chatter and faults, then holds, then passes), each
+  // only where no label is placed within min_gap.
+  std::vector<size_t> order(marks.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return marks[a].priority < marks[b].priority; });
+  std::vector<double> placed;
+  std::vector<bool> labelled(marks.size(), false);
+  for (size_t i : order) {
+    bool room = true;
+    for (double t : placed) room = room && std::fabs(marks[i].t - t) >= min_gap;
+    if (room) {
+      placed.push_back(marks[i].t);
+      labelled[i] = true;
+    }
+  }
+  for (size_t i = 0; i < marks.size(); ++i) {
+    fig.add_vertical(marks[i].t, labelled[i] ? marks[i].label : std::string()).color = marks[i].color;
   }
 }
 
@@ -71,6 +104,8 @@ void write_plots(const std::string& dir, const EdgeCore& core, const RunResult& 
     fref.push_back(r.f_ref_n);
     feed.push_back(r.feedrate_mm_s);
   }
+  // About a label's width on a 1000 px wide plot.
+  const double gap = (run.end_time_s > 0 ? run.end_time_s : 1.0) / 14.0;
   const std::string name = std::string(variant_name(core.config().variant)) + " (" +
                            core.config().config_id + ")";
   {
@@ -86,7 +121,7 @@ void write_plots(const std::string& dir, const EdgeCore& core, const RunResult& 
     auto& ref = fig.add_line("F_ref (power limit)", t, fref);
     ref.dashed = true;
     ref.color = "#009E73";
-    add_marks(fig, run);
+    add_marks(fig, run, gap);
     fig.write(out / "force.svg");
   }
   {
@@ -96,7 +131,7 @@ void write_plots(const std::string& dir, const EdgeCore& core, const RunResult& 
     fig.y_axis().label = "feedrate (mm/s)";
     fig.y_axis().include_zero = true;
     fig.add_line("feedrate", t, feed);
-    add_marks(fig, run);
+    add_marks(fig, run, gap);
     fig.write(out / "feed.svg");
   }
   {

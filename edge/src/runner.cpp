@@ -95,41 +95,50 @@ namespace {
 // harmonics); chatter does not. Per revolution in the cut, the statistic is
 // RMS(v_k - v_{k-1}) / RMS(v_k) of the relative tool-part vibration v over
 // consecutive revolutions: about 0.02-0.05 while the cutter enters the part
-// (the forced vibration changes slowly), growing past 1 in chatter. Onset is
-// the start of the first of two consecutive revolutions in which the
-// statistic is above kOnsetThreshold and larger than the revolution before.
+// (the forced vibration changes slowly), growing past 1 in chatter.
 constexpr double kOnsetThreshold = 0.15;
 constexpr double kMinEngagement = 0.05;
 
 double chatter_onset(const RunResult& run, int samples_per_rev, int decimation) {
-  const int n = samples_per_rev / decimation;
-  if (n < 4 || run.samples.size() < static_cast<size_t>(3 * n)) return -1;
-  int above = 0;
-  double previous = 1e9;
-  for (size_t start = static_cast<size_t>(n); start + static_cast<size_t>(n) <= run.samples.size();
-       start += static_cast<size_t>(n)) {
-    double diff = 0, energy = 0, energy_before = 0;
-    bool in_cut = true;
-    for (size_t k = start; k < start + static_cast<size_t>(n); ++k) {
+  const size_t n = static_cast<size_t>(samples_per_rev / decimation);
+  if (n < 4 || run.samples.size() < 3 * n) return -1;
+  const ModuleMask hold = static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G));
+  // Per revolution: the statistic, and whether it is comparable with the
+  // revolution before (both fully in the cut, no hold, not leaving the part).
+  const size_t revs = run.samples.size() / n;
+  std::vector<double> ratio(revs, 0.0);
+  std::vector<bool> comparable(revs, false);
+  for (size_t r = 1; r < revs; ++r) {
+    double diff = 0, energy = 0;
+    bool ok = true;
+    for (size_t k = r * n; k < (r + 1) * n; ++k) {
       const TraceSample& now = run.samples[k];
-      const TraceSample& before = run.samples[k - static_cast<size_t>(n)];
+      const TraceSample& before = run.samples[k - n];
       if (std::isnan(now.vibration_y_mm) || std::isnan(before.vibration_y_mm)) return -1;
-      // In the cut, and not leaving the part (the cutter's exit changes the
-      // forced vibration abruptly, as its entry does).
-      in_cut = in_cut && now.in_pass && before.in_pass && now.engagement > kMinEngagement &&
-               before.engagement > kMinEngagement && now.engagement >= before.engagement;
+      // A hold or the end of the pass that begins within this revolution
+      // (a reaction to it) ends the comparison there; one in force at its
+      // start, or in the revolution before, makes it not comparable.
+      const bool stopped = !now.in_pass || (now.active & hold) != 0;
+      if (stopped && k > r * n) break;
+      ok = ok && !stopped && before.in_pass && now.engagement > kMinEngagement &&
+           before.engagement > kMinEngagement && now.engagement >= before.engagement &&
+           (before.active & hold) == 0;
       const double d = now.vibration_y_mm - before.vibration_y_mm;
       diff += d * d;
       energy += now.vibration_y_mm * now.vibration_y_mm;
-      energy_before += before.vibration_y_mm * before.vibration_y_mm;
     }
-    // Entering the part, the statistic starts high and falls revolution by
-    // revolution as the engagement settles; chatter makes it grow.
-    const double ratio = energy > 0 ? std::sqrt(diff / energy) : 0;
-    const bool growing = in_cut && energy_before > 0 && ratio > kOnsetThreshold && ratio > previous;
-    previous = in_cut ? ratio : 1e9;
-    above = growing ? above + 1 : 0;
-    if (above == 2) return run.samples[start - static_cast<size_t>(n)].t_s;
+    comparable[r] = ok && energy > 0;
+    ratio[r] = energy > 0 ? std::sqrt(diff / energy) : 0;
+  }
+  // Entering the part the statistic starts high and falls as the engagement
+  // settles; chatter makes it grow. Onset: a comparable revolution above the
+  // threshold and above the one before, followed by a larger one -- or by
+  // one that is not comparable any more (a hold or a rewrite reacting to it,
+  // or the end of the pass).
+  for (size_t r = 2; r + 1 < revs; ++r) {
+    if (!comparable[r] || !comparable[r - 1]) continue;
+    if (ratio[r] <= kOnsetThreshold || ratio[r] <= ratio[r - 1]) continue;
+    if (!comparable[r + 1] || ratio[r + 1] > ratio[r]) return run.samples[r * n].t_s;
   }
   return -1;
 }

@@ -101,6 +101,12 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
     smc::machining::TdsSearchOptions so;
     so.initial_depth_mm = std::max(0.1, job.depth_mm() / 2);
     const auto crit = smc::machining::critical_depth_tds(mach, rpm, fpt, so);
+    if (!crit.bounded && !(crit.stable_depth_mm > 0)) {
+      throw std::runtime_error("job " + in.job.id + ": the cut chatters at every depth down to " +
+                               std::to_string(so.min_depth_mm) + " mm at " + std::to_string(rpm) +
+                               " rpm; choose another spindle speed");
+    }
+    // Unbounded and stable somewhere: stable up to the search's maximum depth.
     out.critical_depth_mm = crit.bounded ? crit.critical_depth_mm : so.max_depth_mm;
     const double allowed = margin * out.critical_depth_mm;
     passes = std::max(1, static_cast<int>(std::ceil(job.depth_mm() / allowed - 1e-9)));

@@ -87,6 +87,9 @@ struct SimulatedMill::Impl {
     machining::SimulatorOptions so;
     so.sample_period_s = period_s / n;
     so.min_spindle_rpm = o.min_spindle_rpm() > 0 ? o.min_spindle_rpm() : 100;
+    // One internal step per call: the force of the step just taken is what
+    // the filters need, not one more evaluation at the sample instant.
+    so.forces_at_sample_instant = false;
     return so;
   }
 
