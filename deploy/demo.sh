@@ -53,10 +53,13 @@ for m in mill-1 mill-2; do
   pids+=($!)
 done
 if [[ -x "$bin/smc-dashboard" ]]; then
-  "$bin/smc-dashboard" --http 127.0.0.1:8080 --partition "$partition" --operator-token demo \
+  token=$(head -c 24 /dev/urandom | od -An -tx1 | tr -d ' \n')
+  ( umask 077; echo "operator $token" >"$run/tokens" )
+  "$bin/smc-dashboard" --http 127.0.0.1:8080 --partition "$partition" --token-file "$run/tokens" \
     >"$run/dashboard.log" 2>&1 &
   pids+=($!)
-  echo "== dashboard: http://127.0.0.1:8080/  (operator token: demo)"
+  echo "== dashboard:     http://127.0.0.1:8080/"
+  echo "   operator link: http://127.0.0.1:8080/#token=$token   (feed hold, release, chatter signal)"
 fi
 
 echo "== submitting a transfer-line job and a job-shop job"

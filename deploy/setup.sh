@@ -19,7 +19,13 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev sqlite3
   # benchmarks: cyclictest beside the edge loop
   rt-tests
+  # dashboard: Boost.Beast (headers), the page's npm packages, the browser test
+  libboost-dev ca-certificates chromium
 )
+# Node.js and npm: Debian's, unless the machine already has them (a Node.js
+# from elsewhere bundles its own npm and conflicts with Debian's npm package).
+command -v node >/dev/null || packages+=(nodejs)
+command -v npm >/dev/null || packages+=(npm)
 
 if [[ "${1:-}" == "--print" ]]; then
   printf '%s\n' "${packages[@]}"

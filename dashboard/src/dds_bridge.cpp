@@ -1,0 +1,336 @@
+#include "dds_bridge.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <deque>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "cell_state.hpp"
+#include "event.hpp"
+#include "smc/transport/document.hpp"
+#include "smc/transport/endpoint.hpp"
+#include "smc/transport/participant.hpp"
+#include "smc/wire/topics.hpp"
+#include "smc_config.pb.h"
+
+namespace smc::dashboard {
+
+namespace {
+
+using namespace std::chrono_literals;
+namespace tr = smc::transport;
+
+enum Token : std::int64_t {
+  kSummaryToken,
+  kBatchToken,
+  kSituationToken,
+  kStatusToken,
+  kChatterToken,
+  kProgressToken,
+  kConfigToken,
+  kProgramToken,
+  kJobToken,
+};
+
+// Samples taken per reader per wake-up, so that one busy topic cannot starve
+// the others (or the command queue) for long.
+constexpr std::size_t kTakeBatch = 256;
+
+tr::Schema schema_of(const google::protobuf::Message& m) {
+  return tr::Schema{m.GetDescriptor()->full_name(), config::SCHEMA_VERSION_CURRENT};
+}
+
+smc_data_OperatorAction wire_action(CommandAction a) {
+  switch (a) {
+    case CommandAction::kFeedHoldOn:
+      return smc_data_OP_FEED_HOLD_ON;
+    case CommandAction::kFeedHoldOff:
+      return smc_data_OP_FEED_HOLD_OFF;
+    case CommandAction::kChatterSignal:
+      return smc_data_OP_CHATTER_SIGNAL;
+  }
+  return smc_data_OP_FEED_HOLD_ON;
+}
+
+std::uint64_t unix_now_ns() {
+  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::system_clock::now().time_since_epoch())
+                                        .count());
+}
+
+tr::ParticipantOptions participant_options(const DdsOptions& o) {
+  tr::ParticipantOptions p;
+  p.domain_id = o.domain_id;
+  p.partition = o.partition;
+  p.config = o.config;
+  return p;
+}
+
+}  // namespace
+
+struct DdsBridge::Impl {
+  Impl(const DdsOptions& options, CellState& s, EventSink& k)
+      : state(s),
+        sink(k),
+        participant(participant_options(options)),
+        summary_topic(participant),
+        batch_topic(participant),
+        situation_topic(participant),
+        status_topic(participant),
+        chatter_topic(participant),
+        progress_topic(participant),
+        command_topic(participant),
+        config_topic(participant, wire::kConfigTopic),
+        program_topic(participant, wire::kProgramTopic),
+        job_topic(participant, wire::kJobStatusTopic),
+        summaries(summary_topic),
+        batches(batch_topic),
+        situations(situation_topic),
+        statuses(status_topic),
+        chatters(chatter_topic),
+        progresses(progress_topic),
+        configs(config_topic, schema_of(config::SupervisorConfig::default_instance())),
+        programs(program_topic, schema_of(config::PartProgram::default_instance())),
+        jobs(job_topic, schema_of(config::JobStatus::default_instance())),
+        commands(command_topic),
+        waitset(participant),
+        next_command_id(unix_now_ns() / 1000) {
+    waitset.attach(summaries, kSummaryToken);
+    waitset.attach(batches, kBatchToken);
+    waitset.attach(situations, kSituationToken);
+    waitset.attach(statuses, kStatusToken);
+    waitset.attach(chatters, kChatterToken);
+    waitset.attach(progresses, kProgressToken);
+    waitset.attach(configs.reader(), kConfigToken);
+    waitset.attach(programs.reader(), kProgramToken);
+    waitset.attach(jobs.reader(), kJobToken);
+  }
+
+  void publish(std::vector<Event> events) {
+    for (auto& e : events) sink.publish(std::move(e));
+  }
+
+  void run() {
+    std::vector<std::int64_t> fired;
+    while (!stopping.load(std::memory_order_acquire)) {
+      try {
+        waitset.wait(500ms, fired);
+        write_pending_commands();
+        for (const auto token : fired) take(token);
+      } catch (const std::exception& e) {
+        // A failing DDS call must not end the dashboard; report and go on.
+        spdlog::error("dds: {}", e.what());
+        std::this_thread::sleep_for(100ms);
+      }
+    }
+    fail_pending_commands("the dashboard is stopping");
+  }
+
+  void take(std::int64_t token) {
+    auto on_reject = [this](const tr::DocumentError& err) {
+      documents_rejected.fetch_add(1, std::memory_order_relaxed);
+      spdlog::warn("dds: rejected document: {}", err.message);
+    };
+    switch (token) {
+      case kSummaryToken:
+        summaries.take(
+            [&](const smc_data_ForceSummary& s, const tr::SampleInfo& i) {
+              if (i.valid_data) publish(state.on_summary(s, i.source_timestamp_ns));
+            },
+            kTakeBatch);
+        break;
+      case kBatchToken:
+        batches.take(
+            [&](const smc_data_ForceBatch& b, const tr::SampleInfo& i) {
+              if (i.valid_data) publish(state.on_batch(b, i.source_timestamp_ns));
+            },
+            kTakeBatch);
+        break;
+      case kSituationToken:
+        situations.take(
+            [&](const smc_data_SupervisorSituation& s, const tr::SampleInfo& i) {
+              if (i.valid_data) publish(state.on_situation(s, i.source_timestamp_ns));
+            },
+            kTakeBatch);
+        break;
+      case kStatusToken:
+        statuses.take(
+            [&](const smc_data_EdgeStatus& s, const tr::SampleInfo& i) {
+              if (i.valid_data) {
+                publish(state.on_status(s));
+              } else if (i.instance_state != tr::InstanceState::kAlive) {
+                // Invalid samples carry the key: this edge's writer is gone.
+                publish(state.on_edge_gone(wire::get_string(s.machine_id)));
+              }
+            },
+            kTakeBatch);
+        break;
+      case kChatterToken:
+        chatters.take(
+            [&](const smc_data_ChatterEvent& e, const tr::SampleInfo& i) {
+              if (i.valid_data) publish(state.on_chatter(e));
+            },
+            kTakeBatch);
+        break;
+      case kProgressToken:
+        progresses.take(
+            [&](const smc_data_JobProgress& p, const tr::SampleInfo& i) {
+              if (i.valid_data) publish(state.on_progress(p));
+            },
+            kTakeBatch);
+        break;
+      case kConfigToken:
+        configs.take([&](const std::string& key,
+                         const config::SupervisorConfig& c) { publish(state.on_config(key, c)); },
+                     on_reject);
+        break;
+      case kProgramToken:
+        programs.take([&](const std::string& key,
+                          const config::PartProgram& p) { publish(state.on_program(key, p)); },
+                      on_reject);
+        break;
+      case kJobToken:
+        jobs.take([&](const std::string& key,
+                      const config::JobStatus& j) { publish(state.on_job(key, j)); },
+                  on_reject);
+        break;
+      default:
+        break;
+    }
+  }
+
+  void write_pending_commands() {
+    std::deque<std::pair<CommandRequest, Done>> batch;
+    {
+      std::lock_guard lock(mu);
+      batch.swap(pending);
+    }
+    for (auto& [req, done] : batch) {
+      CommandRecord rec;
+      rec.request = std::move(req);
+      rec.command_id = ++next_command_id;
+      rec.issued_unix_ns = unix_now_ns();
+      smc_data_OperatorCommand cmd{};
+      wire::set_string(cmd.machine_id, rec.request.machine_id);
+      wire::set_string(cmd.operator_name, rec.request.operator_name);
+      cmd.command_id = rec.command_id;
+      cmd.issued_unix_ns = rec.issued_unix_ns;
+      cmd.action = wire_action(rec.request.action);
+      try {
+        commands.write(cmd);
+        rec.sent = true;
+        commands_sent.fetch_add(1, std::memory_order_relaxed);
+        spdlog::info("operator command {} sent: {} on {} by operator '{}' from {}", rec.command_id,
+                     to_string(rec.request.action), rec.request.machine_id,
+                     rec.request.operator_name, rec.request.remote);
+      } catch (const std::exception& e) {
+        rec.error = e.what();
+        commands_failed.fetch_add(1, std::memory_order_relaxed);
+        spdlog::error("operator command {} NOT sent: {} on {} by operator '{}' from {}: {}",
+                      rec.command_id, to_string(rec.request.action), rec.request.machine_id,
+                      rec.request.operator_name, rec.request.remote, rec.error);
+      }
+      publish(state.on_command(rec));
+      if (done) done(rec);
+    }
+  }
+
+  void fail_pending_commands(const std::string& why) {
+    std::deque<std::pair<CommandRequest, Done>> batch;
+    {
+      std::lock_guard lock(mu);
+      batch.swap(pending);
+    }
+    for (auto& [req, done] : batch) {
+      CommandRecord rec;
+      rec.request = std::move(req);
+      rec.error = why;
+      if (done) done(rec);
+    }
+  }
+
+  CellState& state;
+  EventSink& sink;
+  tr::Participant participant;
+  tr::Topic<smc_data_ForceSummary> summary_topic;
+  tr::Topic<smc_data_ForceBatch> batch_topic;
+  tr::Topic<smc_data_SupervisorSituation> situation_topic;
+  tr::Topic<smc_data_EdgeStatus> status_topic;
+  tr::Topic<smc_data_ChatterEvent> chatter_topic;
+  tr::Topic<smc_data_JobProgress> progress_topic;
+  tr::Topic<smc_data_OperatorCommand> command_topic;
+  tr::Topic<smc_data_Envelope> config_topic;
+  tr::Topic<smc_data_Envelope> program_topic;
+  tr::Topic<smc_data_Envelope> job_topic;
+  tr::Reader<smc_data_ForceSummary> summaries;
+  tr::Reader<smc_data_ForceBatch> batches;
+  tr::Reader<smc_data_SupervisorSituation> situations;
+  tr::Reader<smc_data_EdgeStatus> statuses;
+  tr::Reader<smc_data_ChatterEvent> chatters;
+  tr::Reader<smc_data_JobProgress> progresses;
+  tr::DocumentReader<config::SupervisorConfig> configs;
+  tr::DocumentReader<config::PartProgram> programs;
+  tr::DocumentReader<config::JobStatus> jobs;
+  tr::Writer<smc_data_OperatorCommand> commands;
+  tr::WaitSet waitset;
+
+  std::thread thread;
+  std::atomic<bool> stopping{false};
+  mutable std::mutex mu;  // guards `pending`
+  std::deque<std::pair<CommandRequest, Done>> pending;
+  std::uint64_t next_command_id;
+  std::atomic<std::uint64_t> commands_sent{0};
+  std::atomic<std::uint64_t> commands_failed{0};
+  std::atomic<std::uint64_t> documents_rejected{0};
+};
+
+DdsBridge::DdsBridge(const DdsOptions& options, CellState& state, EventSink& sink)
+    : impl_(std::make_unique<Impl>(options, state, sink)) {}
+
+DdsBridge::~DdsBridge() { stop(); }
+
+void DdsBridge::start() {
+  if (impl_->thread.joinable()) return;
+  impl_->thread = std::thread([this] { impl_->run(); });
+}
+
+void DdsBridge::stop() noexcept {
+  if (!impl_->thread.joinable()) return;
+  impl_->stopping.store(true, std::memory_order_release);
+  try {
+    impl_->waitset.wake();
+  } catch (...) {  // the wait times out within 500 ms anyway
+  }
+  impl_->thread.join();
+}
+
+void DdsBridge::submit(CommandRequest request, Done done) {
+  bool queued = false;
+  {
+    std::lock_guard lock(impl_->mu);
+    if (!impl_->stopping.load(std::memory_order_acquire) && impl_->thread.joinable()) {
+      impl_->pending.emplace_back(std::move(request), std::move(done));
+      queued = true;
+    }
+  }
+  if (queued) {
+    impl_->waitset.wake();
+    return;
+  }
+  CommandRecord rec;
+  rec.request = std::move(request);
+  rec.error = "the dashboard's DDS side is not running";
+  if (done) done(rec);
+}
+
+DdsBridge::Counters DdsBridge::counters() const {
+  return Counters{impl_->commands_sent.load(std::memory_order_relaxed),
+                  impl_->commands_failed.load(std::memory_order_relaxed),
+                  impl_->documents_rejected.load(std::memory_order_relaxed)};
+}
+
+}  // namespace smc::dashboard

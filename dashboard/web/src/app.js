@@ -1,0 +1,593 @@
+// smc-dashboard page: a cell view (every mill at a glance, all jobs) and a
+// mill view (live F_Y chart with marks, raw forces, the supervisor's Grafcet
+// with its active steps and modules, jobs, chatter events, operator
+// controls). Data: GET /api/... once, then the Server-Sent Events stream
+// /api/stream. See dashboard/README.md for both.
+
+import { ForceChart, RawChart, Sparkline, formatMachineTime } from './charts.js';
+import { GrafcetView } from './grafcet.js';
+
+const MODULES = {
+  A: 'feedrate routine', B: 'operator input monitor', C: 'feed hold',
+  D: 'operator chatter detector', E: 'automatic chatter detector', F: 'chatter suppressor',
+  G: 'chatter suppression routine', H: 'parameter estimator', I: 'force signal processor',
+  J: 'contact monitor', K: 'adaptive force controller', L: 'model-based force controller',
+};
+const HISTORY_S = 120;        // kept per mill in the browser
+const MAX_POINTS = 4000;      // per mill, trimmed in chunks
+const RENDER_INTERVAL_MS = 100;
+
+// ------------------------------------------------------------------ state --
+
+const store = {
+  mills: new Map(),
+  jobs: new Map(),
+  commands: [],
+  session: { operator: null, can_command: false, commands_enabled: false },
+  stream: { connected: false, dropped: 0, events: 0 },
+  focus: null,  // machine id of the mill view, null for the cell view
+};
+
+// Arrival latency of force summaries: browser clock at arrival minus the
+// DDS source timestamp of the sample (the edge's wall clock when it wrote it).
+const latency = { n: 0, ring: new Float64Array(20000) };
+window.smcStats = {
+  summaries: () => latency.n,
+  latencies: () => Array.from(latency.ring.subarray(0, Math.min(latency.n, latency.ring.length))),
+  reset: () => { latency.n = 0; },
+};
+
+function newMill(id) {
+  return {
+    id, online: false, status: null, summary: null, situation: null, config: null, program: null,
+    jobId: null, chatterCount: 0,
+    hist: { t: [], fy: [], fref: [], feed: [], pass: [], count: [] },
+    situations: [], chatter: [], batches: [],
+  };
+}
+
+function mill(id) {
+  let m = store.mills.get(id);
+  if (!m) {
+    m = newMill(id);
+    store.mills.set(id, m);
+    rebuildNav();
+  }
+  return m;
+}
+
+function applyMillState(s) {
+  const m = mill(s.machine_id);
+  m.online = s.online;
+  m.status = s.status;
+  m.summary = s.summary;
+  m.situation = s.situation;
+  m.config = s.config;
+  m.program = s.program ? s.program.program : null;
+  m.chatterCount = s.chatter_events;
+  if (s.job) {
+    m.jobId = s.job.job_id;
+    store.jobs.set(s.job.job_id, s.job);
+  }
+  if (s.summary) appendPoint(m, s.summary);
+  if (s.situation) appendSituation(m, s.situation);
+}
+
+function appendPoint(m, s) {
+  const h = m.hist;
+  const n = h.t.length;
+  if (n > 0 && s.t <= h.t[n - 1]) return;  // already have it (replayed by hello)
+  if (n > 0 && s.t - h.t[n - 1] > 1.0) {  // a gap in the data: break the lines there
+    h.t.push((s.t + h.t[n - 1]) / 2);
+    for (const k of ['fy', 'fref', 'feed']) h[k].push(null);
+    h.pass.push(h.pass[n - 1]);
+    h.count.push(h.count[n - 1]);
+  }
+  h.t.push(s.t);
+  h.fy.push(s.f_y_peak_n);
+  h.fref.push(s.f_ref_n > 0 ? s.f_ref_n : null);
+  h.feed.push(s.feedrate_mm_s);
+  h.pass.push(s.pass_index);
+  h.count.push(s.pass_count);
+  if (h.t.length > MAX_POINTS) {
+    const cut = h.t.length - MAX_POINTS * 0.8;
+    for (const k of Object.keys(h)) h[k].splice(0, cut);
+  }
+}
+
+function appendSituation(m, s) {
+  const last = m.situations[m.situations.length - 1];
+  if (last && s.t <= last.t) return;
+  m.situations.push({ t: s.t, modules_mask: s.modules_mask, step_indices: s.step_indices });
+  if (m.situations.length > 2000) m.situations.splice(0, 500);
+}
+
+function setJob(j) {
+  const old = store.jobs.get(j.job_id);
+  store.jobs.set(j.job_id, { ...old, ...j, progress: j.progress ?? old?.progress ?? null });
+}
+
+// -------------------------------------------------------------- the stream --
+
+let source = null;
+// Bumped by the events that change the tables (jobs, chatter, commands), so
+// a view redraws those only when needed, not on every force sample.
+let tablesVersion = 0;
+const TABLE_EVENTS = new Set(['hello', 'job', 'progress', 'chatter', 'command', 'config', 'mill']);
+
+function connect() {
+  if (source) source.close();
+  const params = new URLSearchParams();
+  if (store.focus) {
+    params.set('mill', store.focus);
+    params.set('raw', '1');
+  }
+  source = new EventSource('/api/stream' + (store.focus ? '?' + params : ''));
+  source.onopen = () => { store.stream.connected = true; scheduleRender(); };
+  source.onerror = () => { store.stream.connected = false; scheduleRender(); };
+  const on = (kind, fn) => source.addEventListener(kind, (e) => {
+    store.stream.events++;
+    fn(JSON.parse(e.data));
+    if (TABLE_EVENTS.has(kind)) tablesVersion++;
+    scheduleRender();
+  });
+  on('hello', (d) => {
+    for (const s of d.cell.mills) applyMillState(s);
+    for (const j of d.cell.jobs) setJob(j);
+    store.commands = d.cell.commands.slice().reverse();
+    if (store.focus) {
+      loadHistory(store.focus, HISTORY_S);
+    } else {
+      for (const id of store.mills.keys()) loadHistory(id, 40);  // the cards' traces
+    }
+  });
+  on('summary', (s) => {
+    const now = performance.timeOrigin + performance.now();
+    latency.ring[latency.n % latency.ring.length] = now - s.src_unix_ms;
+    latency.n++;
+    const m = mill(s.machine_id);
+    m.summary = s;
+    appendPoint(m, s);
+  });
+  on('batch', (b) => {
+    const m = mill(b.machine_id);
+    m.batches.push(b);
+    if (m.batches.length > 4) m.batches.shift();
+  });
+  on('situation', (s) => {
+    const m = mill(s.machine_id);
+    m.situation = s;
+    appendSituation(m, s);
+  });
+  on('status', (s) => {
+    const m = mill(s.machine_id);
+    m.status = s;
+    m.online = s.online;
+  });
+  on('chatter', (c) => {
+    const m = mill(c.machine_id);
+    m.chatter.push(c);
+    m.chatterCount++;
+  });
+  on('progress', (p) => {
+    const m = mill(p.machine_id);
+    m.jobId = p.job_id;
+    const j = store.jobs.get(p.job_id) ?? { job_id: p.job_id, machine_id: p.machine_id, status: null };
+    store.jobs.set(p.job_id, { ...j, progress: p });
+  });
+  on('job', setJob);
+  on('config', (c) => { mill(c.machine_id).config = c; });
+  on('program', (p) => { mill(p.machine_id).program = p.program; });
+  on('command', (c) => { store.commands.unshift(c); store.commands.length = Math.min(store.commands.length, 50); });
+  on('mill', (m) => { mill(m.machine_id); });
+  on('dropped', (d) => { store.stream.dropped += d.dropped; });
+}
+
+// A null between two points more than a second apart, so lines do not
+// bridge a time without data.
+function breakGaps(h) {
+  const out = { t: [], fy: [], fref: [], feed: [], pass: [], count: [] };
+  for (let i = 0; i < h.t.length; i++) {
+    if (i > 0 && h.t[i] - h.t[i - 1] > 1.0) {
+      out.t.push((h.t[i] + h.t[i - 1]) / 2);
+      out.fy.push(null); out.fref.push(null); out.feed.push(null);
+      out.pass.push(h.pass[i - 1]); out.count.push(h.count[i - 1]);
+    }
+    for (const k of Object.keys(out)) out[k].push(h[k][i]);
+  }
+  return out;
+}
+
+async function loadHistory(id, seconds) {
+  const r = await fetch(`/api/mills/${encodeURIComponent(id)}/history?seconds=${seconds}`);
+  if (!r.ok) return;
+  const h = await r.json();
+  const m = mill(id);
+  const live = m.hist;
+  const firstLive = h.t.length ? h.t[h.t.length - 1] : -Infinity;
+  const hist = { t: h.t, fy: h.f_y_peak_n, fref: h.f_ref_n.map((v) => (v > 0 ? v : null)),
+    feed: h.feedrate_mm_s, pass: h.pass_index, count: h.pass_count };
+  for (let i = 0; i < live.t.length; i++) {
+    if (live.t[i] <= firstLive) continue;
+    for (const k of Object.keys(hist)) hist[k].push(live[k][i]);
+  }
+  m.hist = breakGaps(hist);
+  m.situations = h.situations.concat(m.situations.filter((s) => s.t > (h.situations.at(-1)?.t ?? -Infinity)));
+  m.chatter = h.chatter_events;
+  m.batches = h.batches.slice(-4);
+  tablesVersion++;
+  scheduleRender();
+}
+
+// --------------------------------------------------------------- sessions --
+
+const TOKEN_KEY = 'smc-dashboard-token';
+
+function token() { return sessionStorage.getItem(TOKEN_KEY); }
+
+async function checkSession() {
+  const headers = token() ? { Authorization: 'Bearer ' + token() } : {};
+  const r = await fetch('/api/session', { headers });
+  if (r.status === 401) {
+    sessionStorage.removeItem(TOKEN_KEY);
+    toast('That operator token was refused.', 'error');
+    return checkSession();
+  }
+  store.session = await r.json();
+  renderSession();
+  scheduleRender();
+}
+
+async function sendCommand(action) {
+  const id = store.focus;
+  const r = await fetch(`/api/mills/${encodeURIComponent(id)}/commands`, {
+    method: 'POST',
+    headers: { 'Content-Type': 'application/json', Authorization: 'Bearer ' + (token() ?? '') },
+    body: JSON.stringify({ action }),
+  });
+  const body = await r.json().catch(() => ({}));
+  if (r.status === 202) {
+    toast(`${action.replaceAll('_', ' ')} sent to ${id} (command ${body.command_id}, operator ${body.operator})`, 'ok');
+  } else {
+    toast(`${action.replaceAll('_', ' ')} refused (${r.status}): ${body.error ?? r.statusText}`, 'error');
+  }
+}
+
+// ---------------------------------------------------------------- helpers --
+
+function h(tag, attrs = {}, ...children) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (v === false || v == null) continue;
+    if (k === 'class') e.className = v;
+    else if (k.startsWith('on')) e.addEventListener(k.slice(2), v);
+    else if (k === 'dataset') Object.assign(e.dataset, v);
+    else e.setAttribute(k, v === true ? '' : v);
+  }
+  for (const c of children.flat()) {
+    if (c == null || c === false) continue;
+    e.append(c instanceof Node ? c : String(c));
+  }
+  return e;
+}
+
+function toast(text, kind) {
+  const t = h('div', { class: `toast ${kind}`, role: 'status' }, text);
+  document.getElementById('toasts').append(t);
+  setTimeout(() => t.remove(), 6000);
+}
+
+const fmt = (v, d = 0, unit = '') => (v == null || !isFinite(v) ? '-' : v.toFixed(d) + unit);
+const variantName = (v) => ({ SMC_I: 'SMC I', SMC_II: 'SMC II', SMC_NONE: 'no control' }[v] ?? '-');
+const stateName = (s) => (s ? s.replace(/^EDGE_|^JOB_/, '').replace('_', ' ').toLowerCase() : 'unknown');
+
+function edgeBadge(m) {
+  if (!m.status) return h('span', { class: 'badge muted' }, 'no status');
+  if (!m.online) return h('span', { class: 'badge offline' }, 'offline');
+  const s = m.status.state;
+  const cls = { EDGE_RUNNING: 'run', EDGE_FEED_HOLD: 'hold', EDGE_FAULT: 'fault' }[s] ?? 'idle';
+  return h('span', { class: `badge ${cls}`, 'data-edge-state': s }, stateName(s));
+}
+
+function stepText(m) {
+  const steps = m.situation?.active_steps;
+  const g = m.config?.grafcet;
+  if (!steps || !g?.ok) return '-';
+  return steps.map((n) => `X${n} ${g.steps.find((s) => s.number === n)?.label ?? ''}`).join(', ');
+}
+
+function jobRank(j) {
+  const s = j.status?.state ?? (j.progress?.phase === 'JOB_DONE' ? 'JOB_DONE' : 'JOB_RUNNING');
+  return { JOB_RUNNING: 0, JOB_ASSIGNED: 1, JOB_PLANNED: 2, JOB_QUEUED: 3 }[s] ?? 4;
+}
+
+function jobsTable(jobs, showMill) {
+  const rows = jobs.slice().sort((a, b) => jobRank(a) - jobRank(b) ||
+    (jobRank(a) === 4 ? Number(b.status?.updated_unix_ms ?? 0) - Number(a.status?.updated_unix_ms ?? 0)
+                      : a.job_id.localeCompare(b.job_id)));
+  const body = rows.slice(0, 40).map((j) => {
+    const st = j.status;
+    const p = j.progress;
+    const state = st?.state ?? p?.phase ?? 'JOB_RUNNING';
+    const running = state === 'JOB_RUNNING';
+    const frac = state === 'JOB_DONE' ? 1 : (running && p ? p.fraction_done : st?.fraction_done ?? 0);
+    const passIndex = running && p ? p.pass_index : st?.pass_index ?? 0;
+    const passCount = running && p ? p.pass_count : st?.pass_count ?? 0;
+    const planned = st?.passes_planned ?? passCount;
+    const chatter = Math.max(st?.chatter_events ?? 0, p?.chatter_events ?? 0);
+    return h('tr', { dataset: { job: j.job_id } },
+      h('td', {}, h('div', { class: 'strong' }, j.job_id), h('div', { class: 'muted small' }, st?.job?.part_id ?? '')),
+      showMill && h('td', {}, j.machine_id || st?.machine_id || '-'),
+      h('td', {}, h('span', { class: `badge job-${state.toLowerCase()}` }, stateName(state))),
+      h('td', {}, h('span', { class: `badge variant ${st?.variant ?? ''}` }, variantName(st?.variant))),
+      h('td', { class: 'num' }, state === 'JOB_DONE' ? `${passCount}` : `${Math.min(passIndex + 1, passCount)} / ${passCount}`,
+        planned !== passCount ? h('div', { class: 'muted small' }, `planned ${planned}`) : null),
+      h('td', {}, h('div', { class: 'progress', title: `${Math.round(frac * 100)} %` },
+        h('div', { class: 'fill', style: `width:${(frac * 100).toFixed(1)}%` })),
+        h('div', { class: 'muted small' }, `${Math.round(frac * 100)} %`)),
+      h('td', { class: 'num' }, chatter || ''),
+      h('td', { class: 'why', title: st?.explanation ?? '' }, h('div', { class: 'clamp' }, st?.explanation ?? '')));
+  });
+  return h('table', { class: 'jobs' },
+    h('thead', {}, h('tr', {}, h('th', {}, 'job'), showMill && h('th', {}, 'mill'), h('th', {}, 'state'),
+      h('th', {}, 'SMC'), h('th', {}, 'passes'), h('th', {}, 'progress'), h('th', {}, 'chatter'),
+      h('th', {}, 'why this SMC'))),
+    h('tbody', {}, body.length ? body : h('tr', {}, h('td', { colspan: 8, class: 'muted' }, 'No jobs yet.'))));
+}
+
+// ------------------------------------------------------------------ views --
+
+let view = null;  // { kind, render(), destroy() }
+let renderPending = false;
+
+function scheduleRender() {
+  if (renderPending) return;
+  renderPending = true;
+  setTimeout(() => requestAnimationFrame(() => {
+    renderPending = false;
+    renderHeader();
+    view?.render();
+  }), RENDER_INTERVAL_MS);
+}
+
+function rebuildNav() {
+  const nav = document.getElementById('nav');
+  nav.replaceChildren(
+    h('a', { href: '#/', class: store.focus ? '' : 'current' }, 'Cell'),
+    ...[...store.mills.keys()].sort().map((id) =>
+      h('a', { href: `#/mill/${encodeURIComponent(id)}`, class: store.focus === id ? 'current' : '' }, id)));
+}
+
+function renderHeader() {
+  const s = document.getElementById('stream-state');
+  s.className = store.stream.connected ? 'live' : 'down';
+  s.textContent = store.stream.connected ? 'live' : 'reconnecting';
+  s.title = `${store.stream.events} events received; ${store.stream.dropped} dropped by the server for this page`;
+  document.getElementById('dropped').textContent = store.stream.dropped ? `${store.stream.dropped} dropped` : '';
+}
+
+function renderSession() {
+  const box = document.getElementById('session');
+  const ses = store.session;
+  if (!ses.commands_enabled) {
+    box.replaceChildren(h('span', { class: 'muted' }, 'read-only dashboard'));
+  } else if (ses.operator) {
+    box.replaceChildren(h('span', {}, 'operator ', h('strong', { id: 'operator-name' }, ses.operator)),
+      h('button', { class: 'link', onclick: () => { sessionStorage.removeItem(TOKEN_KEY); checkSession(); } }, 'sign out'));
+  } else {
+    const input = h('input', { type: 'password', id: 'token-input', placeholder: 'operator token', autocomplete: 'off', 'aria-label': 'operator token' });
+    const form = h('form', { id: 'signin', onsubmit: (e) => {
+      e.preventDefault();
+      if (input.value.trim()) sessionStorage.setItem(TOKEN_KEY, input.value.trim());
+      checkSession();
+    } }, input, h('button', { type: 'submit' }, 'Sign in'));
+    box.replaceChildren(h('span', { class: 'muted' }, 'read-only'), form);
+  }
+}
+
+function cellView() {
+  const cards = h('div', { class: 'cards' });
+  const jobs = h('section', { class: 'panel' }, h('h2', {}, 'Jobs'), h('div', { id: 'jobs' }));
+  const root = h('main', { id: 'cell-view' }, cards, jobs);
+  const sparks = new Map();
+  let drawnTables = -1;
+  return {
+    root,
+    render() {
+      for (const m of [...store.mills.values()].sort((a, b) => a.id.localeCompare(b.id))) {
+        let card = cards.querySelector(`[data-mill="${CSS.escape(m.id)}"]`);
+        if (!card) {
+          card = h('a', { class: 'card mill-card', href: `#/mill/${encodeURIComponent(m.id)}`, dataset: { mill: m.id } },
+            h('div', { class: 'card-head' }, h('span', { class: 'mill-id' }, m.id), h('span', { class: 'edge' }), h('span', { class: 'variant' })),
+            h('div', { class: 'figures' }), h('div', { class: 'spark' }), h('div', { class: 'steps' }),
+            h('div', { class: 'modules' }), h('div', { class: 'job' }));
+          cards.append(card);
+          sparks.set(m.id, new Sparkline(card.querySelector('.spark')));
+        }
+        const s = m.summary;
+        card.classList.toggle('offline', !m.online);
+        card.querySelector('.edge').replaceChildren(edgeBadge(m));
+        card.querySelector('.variant').replaceChildren(h('span', { class: `badge variant ${m.config?.variant ?? ''}` }, variantName(m.config?.variant)));
+        card.querySelector('.figures').replaceChildren(
+          h('div', {}, h('span', { class: 'label' }, 'F_Y '), h('span', { class: 'big' }, fmt(s?.f_y_peak_n, 0)), ' N'),
+          h('div', {}, h('span', { class: 'label' }, 'F_ref '), fmt(s?.f_ref_n || null, 0, ' N')),
+          h('div', {}, h('span', { class: 'label' }, 'feed '), fmt(s?.feedrate_mm_s, 1, ' mm/s')),
+          ...(s?.chatter ? [h('div', { class: 'chatter-flag' }, 'chatter')] : []));
+        const hist = m.hist;
+        const from = hist.t.length ? hist.t[hist.t.length - 1] - 30 : 0;
+        let i0 = hist.t.findIndex((t) => t >= from);
+        if (i0 < 0) i0 = 0;
+        sparks.get(m.id).setData([hist.t.slice(i0), hist.fy.slice(i0), hist.fref.slice(i0)]);
+        card.querySelector('.steps').textContent = stepText(m);
+        card.querySelector('.modules').replaceChildren(...moduleChips(m, true));
+        const j = m.jobId ? store.jobs.get(m.jobId) : null;
+        const frac = j?.progress?.fraction_done ?? j?.status?.fraction_done ?? 0;
+        card.querySelector('.job').replaceChildren(j ? h('div', {},
+          h('span', { class: 'strong' }, j.job_id), ' ', h('span', { class: 'muted' }, j.status?.job?.part_id ?? ''),
+          ` - pass ${(j.progress?.pass_index ?? 0) + 1}/${j.progress?.pass_count ?? j.status?.pass_count ?? '?'}`,
+          m.chatterCount ? h('span', { class: 'chatter-count' }, ` - ${m.chatterCount} chatter`) : null,
+          h('div', { class: 'progress' }, h('div', { class: 'fill', style: `width:${(frac * 100).toFixed(1)}%` })))
+          : h('span', { class: 'muted' }, 'no job'));
+      }
+      if (drawnTables !== tablesVersion) {
+        drawnTables = tablesVersion;
+        document.getElementById('jobs').replaceChildren(jobsTable([...store.jobs.values()], true));
+      }
+    },
+    destroy() { for (const s of sparks.values()) s.destroy(); },
+  };
+}
+
+function moduleChips(m, compact) {
+  const active = m.situation?.modules ?? '';
+  const configured = m.config?.modules ?? [];
+  return Object.entries(MODULES).map(([k, name]) => h('span', {
+    class: `module${active.includes(k) ? ' on' : ''}${configured.length && !configured.includes(k) ? ' unused' : ''}`,
+    title: `${k}: ${name}${active.includes(k) ? ' (active)' : ''}`, dataset: { module: k },
+  }, compact ? k : h('span', {}, h('b', {}, k), ' ', name)));
+}
+
+function marksFor(m) {
+  const spans = [];
+  let open = null;
+  for (const s of m.situations) {
+    const kind = s.modules_mask & (1 << 6) ? 'suppression' : s.modules_mask & (1 << 2) ? 'hold' : null;
+    if (open && open.kind !== kind) { open.t1 = s.t; spans.push(open); open = null; }
+    if (kind && !open) open = { kind, t0: s.t, t1: Infinity };
+  }
+  const h = m.hist;
+  if (open) { open.t1 = h.t.length ? h.t[h.t.length - 1] : open.t0; spans.push(open); }
+  const passes = [];
+  for (let i = 1; i < h.t.length; i++) {
+    if (h.count[i] > 0 && (h.pass[i] !== h.pass[i - 1] || h.count[i] !== h.count[i - 1])) {
+      passes.push({ t: h.t[i], label: `pass ${h.pass[i] + 1}/${h.count[i]}` });
+    }
+  }
+  const chatter = m.chatter.map((c) => ({ t: c.t, label: `chatter (${c.source}${c.frequency_hz ? ', ' + c.frequency_hz.toFixed(0) + ' Hz' : ''})` }));
+  return { spans, passes, chatter };
+}
+
+function millView(id) {
+  const m = mill(id);
+  const controls = h('div', { class: 'controls' },
+    h('button', { id: 'btn-feed-hold', class: 'hold', onclick: () => sendCommand('feed_hold_on') }, 'Feed hold'),
+    h('button', { id: 'btn-release', class: 'release', onclick: () => sendCommand('feed_hold_off') }, 'Release'),
+    h('button', { id: 'btn-chatter', class: 'chatter', onclick: () => sendCommand('chatter_signal') }, 'Signal chatter'));
+  const head = h('section', { class: 'mill-head panel' },
+    h('div', { class: 'title' }, h('h1', {}, id), h('span', { id: 'edge-badge' }), h('span', { id: 'variant-badge' })),
+    h('div', { id: 'mill-facts', class: 'facts' }), controls);
+  const force = h('section', { class: 'panel force' }, h('h2', {}, 'F_Y per revolution, reference, feed'), h('div', { id: 'force-chart' }));
+  const raw = h('section', { class: 'panel raw' }, h('h2', {}, 'Raw F_y and F_z, last revolutions'), h('div', { id: 'raw-chart' }));
+  const grafcet = h('section', { class: 'panel grafcet-panel' },
+    h('h2', {}, 'Operation supervisor ', h('span', { id: 'grafcet-name', class: 'muted' })),
+    h('div', { id: 'grafcet' }), h('h3', {}, 'Modules'), h('div', { id: 'modules', class: 'module-list' }),
+    h('h3', {}, 'Receptivities'), h('div', { id: 'inputs', class: 'inputs' }));
+  const jobs = h('section', { class: 'panel jobs-panel' }, h('h2', {}, 'Job queue'), h('div', { id: 'mill-jobs' }));
+  const chatter = h('section', { class: 'panel' }, h('h2', {}, 'Chatter events'), h('div', { id: 'chatter-list' }));
+  const log = h('section', { class: 'panel' }, h('h2', {}, 'Operator commands'), h('div', { id: 'command-log' }));
+  const root = h('main', { id: 'mill-view', dataset: { mill: id } },
+    head, h('div', { class: 'mill-grid' }, h('div', { class: 'left' }, force, raw, jobs,
+      h('div', { class: 'two' }, chatter, log)), grafcet));
+  let forceChart = null;
+  let rawChart = null;
+  const gv = new GrafcetView(grafcet.querySelector('#grafcet'));
+  const onResize = () => { forceChart?.resize(); rawChart?.resize(); };
+  let drawnTables = -1;
+  window.addEventListener('resize', onResize);
+  return {
+    root,
+    mounted() {
+      forceChart = new ForceChart(force.querySelector('#force-chart'), () => marksFor(m));
+      rawChart = new RawChart(raw.querySelector('#raw-chart'));
+    },
+    render() {
+      const mm = mill(id);
+      root.querySelector('#edge-badge').replaceChildren(edgeBadge(mm));
+      root.querySelector('#variant-badge').replaceChildren(h('span', { class: `badge variant ${mm.config?.variant ?? ''}` }, variantName(mm.config?.variant)));
+      const s = mm.summary;
+      root.querySelector('#mill-facts').replaceChildren(
+        fact('F_Y', fmt(s?.f_y_peak_n, 0, ' N')), fact('F_ref', fmt(s?.f_ref_n || null, 0, ' N')),
+        fact('feed', fmt(s?.feedrate_mm_s, 1, ' mm/s')), fact('depth', fmt(s?.depth_mm, 2, ' mm')),
+        fact('pass', s ? `${Math.min(s.pass_index + 1, s.pass_count)} / ${s.pass_count}` : '-'),
+        fact('contact', s ? (s.in_contact ? 'yes' : 'no') : '-'),
+        fact('machine time', s ? formatMachineTime(s.t, 2) : '-'),
+        fact('config', mm.config?.config_id ?? '-'));
+      for (const b of root.querySelectorAll('.controls button')) {
+        b.disabled = !store.session.can_command || !mm.online;
+        b.title = store.session.can_command ? '' : 'sign in with an operator token to send commands';
+      }
+      const hist = mm.hist;
+      forceChart?.setData([hist.t, hist.fy, hist.fref, hist.feed]);
+      rawChart?.setBatches(mm.batches);
+      gv.setModel(mm.config?.grafcet ?? null);
+      gv.update(mm.situation?.active_steps ?? [], mm.situation?.modules ?? '');
+      root.querySelector('#grafcet-name').textContent = mm.config?.grafcet?.title ?? '';
+      root.querySelector('#grafcet').dataset.activeSteps = (mm.situation?.active_steps ?? []).join(',');
+      root.querySelector('#modules').replaceChildren(...moduleChips(mm, false));
+      const inputs = mm.situation?.inputs ?? {};
+      const described = mm.config?.grafcet?.inputs ?? [];
+      root.querySelector('#inputs').replaceChildren(...Object.entries(inputs).map(([k, v]) => h('span', {
+        class: `input${v ? ' on' : ''}`, title: described.find((d) => d.name === k)?.description ?? '' },
+      h('b', {}, k), ' ', described.find((d) => d.name === k)?.description ?? '')));
+      if (drawnTables === tablesVersion) return;
+      drawnTables = tablesVersion;
+      root.querySelector('#mill-jobs').replaceChildren(jobsTable([...store.jobs.values()].filter(
+        (j) => (j.machine_id || j.status?.machine_id) === id), false));
+      root.querySelector('#chatter-list').replaceChildren(mm.chatter.length ? h('table', { class: 'events' },
+        h('thead', {}, h('tr', {}, ...['machine time', 'source', 'frequency', 'ratio', 'pass', 'passes now', 'job'].map((t) => h('th', {}, t)))),
+        h('tbody', {}, ...mm.chatter.slice(-8).reverse().map((c) => h('tr', {},
+          h('td', {}, formatMachineTime(c.t, 2)), h('td', {}, c.source), h('td', { class: 'num' }, c.frequency_hz ? fmt(c.frequency_hz, 0, ' Hz') : '-'),
+          h('td', { class: 'num' }, fmt(c.energy_ratio, 1)), h('td', { class: 'num' }, c.pass_index + 1), h('td', { class: 'num' }, c.new_pass_count), h('td', {}, c.job_id)))))
+        : h('p', { class: 'muted' }, 'No chatter events.'));
+      const cmds = store.commands.filter((c) => c.machine_id === id).slice(0, 8);
+      root.querySelector('#command-log').replaceChildren(cmds.length ? h('table', { class: 'events' },
+        h('tbody', {}, ...cmds.map((c) => h('tr', {},
+          h('td', {}, new Date(c.issued_unix_ms).toLocaleTimeString()), h('td', {}, c.action.replaceAll('_', ' ')),
+          h('td', {}, h('strong', {}, c.operator)), h('td', {}, c.sent ? 'sent' : 'failed: ' + c.error)))))
+        : h('p', { class: 'muted' }, 'No commands sent from this dashboard.'));
+    },
+    destroy() {
+      window.removeEventListener('resize', onResize);
+      forceChart?.destroy();
+      rawChart?.destroy();
+    },
+  };
+}
+
+function fact(label, value) {
+  return h('div', { class: 'fact' }, h('span', { class: 'label' }, label), h('span', { class: 'value' }, value));
+}
+
+// ---------------------------------------------------------------- routing --
+
+function route() {
+  const hash = location.hash;
+  const tokenMatch = hash.match(/^#token=(.+)$/);
+  if (tokenMatch) {  // a link carrying the operator token: keep it for this tab only
+    sessionStorage.setItem(TOKEN_KEY, decodeURIComponent(tokenMatch[1]));
+    history.replaceState(null, '', location.pathname + '#/');
+    checkSession();
+  }
+  const m = location.hash.match(/^#\/mill\/(.+)$/);
+  const focus = m ? decodeURIComponent(m[1]) : null;
+  if (view && focus === store.focus) return;
+  view?.destroy();
+  store.focus = focus;
+  view = focus ? millView(focus) : cellView();
+  document.getElementById('view').replaceChildren(view.root);
+  view.mounted?.();
+  rebuildNav();
+  connect();
+  scheduleRender();
+}
+
+window.smcApp = {
+  store,
+  points: (id) => store.mills.get(id)?.hist.t.length ?? 0,
+  lastTime: (id) => store.mills.get(id)?.hist.t.at(-1) ?? null,
+  activeSteps: (id) => store.mills.get(id)?.situation?.active_steps ?? [],
+};
+
+window.addEventListener('hashchange', route);
+route();
+checkSession();

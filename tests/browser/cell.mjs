@@ -1,0 +1,67 @@
+// "The cell and its mills" for browser tests and benchmarks, in one place.
+//
+// Default (SMC_TEST_CELL unset or "real"): the real processes, each in the
+// test's DDS partition: a seeded cell database in a temporary folder,
+// `smc-cell serve`, and one `smc-edge run --machine mill-N` per mill on the
+// simulated mill (paced to the wall clock), with a job-shop job submitted
+// for mill-1 so that it runs SMC II (the smc2 Grafcet) and cuts.
+//
+// SMC_TEST_CELL=fake: smc-dashboard-fake-mill, a test tool that plays the
+// cell and N edges on the same topics (for the dashboard's own benchmarks,
+// which need many mills cheaply).
+//
+// Mills are named mill-1 .. mill-N; mill-1 runs SMC II.
+
+import { execFileSync } from 'node:child_process';
+import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { dirname, join, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+import { Proc } from './processes.mjs';
+
+const sourceDir = resolve(dirname(fileURLToPath(import.meta.url)), '..', '..');
+
+function expand(template, vars) {
+  return template.trim().split(/\s+/).map((a) => a.replace(/\{(\w+)\}/g, (_, k) => vars[k]));
+}
+
+async function fakeCell({ binDir, partition, mills }) {
+  const p = new Proc('fake-mill', `${binDir}/smc-dashboard-fake-mill`,
+    ['--mills', String(mills), '--partition', partition]);
+  await p.waitFor(/^ready \d+ mills$/, 15000);
+  return { kind: 'fake', procs: [p], log: p };
+}
+
+async function realCell({ binDir, partition, mills }) {
+  const dir = mkdtempSync(join(tmpdir(), 'smc-browser-'));
+  const db = join(dir, 'cell.db');
+  execFileSync(`${binDir}/smc-cell`, ['db', 'init', '--db', db, '--seed'], { stdio: 'ignore' });
+  const procs = [new Proc('smc-cell', `${binDir}/smc-cell`,
+    ['serve', '--db', db, '--partition', partition])];
+  for (let i = 1; i <= mills; i++) {
+    const mill = `mill-${i}`;
+    procs.push(new Proc(`smc-edge ${mill}`, `${binDir}/smc-edge`,
+      ['run', '--machine', mill, '--partition', partition, '--paced', '--no-realtime',
+       '--mill-model', join(sourceDir, 'cell/models/paper_face_mill.textproto')]));
+  }
+  // mill-1 cuts the job-shop part under SMC II for the length of the test.
+  const job = join(dir, 'job.textproto');
+  writeFileSync(job, 'part_id: "housing-js"\nmachine_id: "mill-1"\n');
+  execFileSync(`${binDir}/smc-cell`, ['job', 'submit', job, '--db', db], { stdio: 'ignore' });
+  const cleanup = () => rmSync(dir, { recursive: true, force: true });
+  return { kind: 'real', procs, log: procs[0], cleanup };
+}
+
+// Starts the cell and `mills` mills in `partition`; resolves once they run.
+export async function startCell({ binDir, partition, mills = 2, kind: wanted }) {
+  const kind = wanted ?? process.env.SMC_TEST_CELL ?? 'real';
+  const cell = kind === 'real' ? await realCell({ binDir, partition, mills })
+                               : await fakeCell({ binDir, partition, mills });
+  cell.mills = Array.from({ length: mills }, (_, i) => `mill-${i + 1}`);
+  cell.stop = async () => {
+    await Promise.all(cell.procs.map((p) => p.stop()));
+    if (cell.cleanup) cell.cleanup();
+  };
+  return cell;
+}

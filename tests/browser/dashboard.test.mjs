@@ -1,0 +1,176 @@
+// Browser test of smc-dashboard, in Debian's headless Chromium driven by
+// playwright-core. Against a running cell with simulated mills (cell.mjs):
+//
+//   1. the page loads and draws mill-1's Grafcet from its SupervisorConfig;
+//   2. the live F_Y chart receives new points (machine time advances);
+//   3. the Grafcet view follows the supervisor: the steps highlighted in the
+//      page equal the active steps seen on DDS by an independent probe, for
+//      at least two different situations;
+//   4. read-only until signed in; a feed hold clicked in the page puts the
+//      edge in feed hold, checked on DDS (the command with the operator's
+//      name, then the edge's situation: step 5 active, module C), and the
+//      page shows it; release brings it back;
+//   5. a screenshot is saved: $SMC_ARTIFACTS_DIR/dashboard.png.
+//
+// Environment (ctest sets it): SMC_BIN_DIR, SMC_NODE_MODULES (playwright-core
+// from npm ci), SMC_ARTIFACTS_DIR, CYCLONEDDS_URI (loopback profile).
+// Every process started here is stopped on success, failure or timeout.
+
+import assert from 'node:assert/strict';
+import { mkdtempSync, rmSync, writeFileSync, mkdirSync, chmodSync } from 'node:fs';
+import { createRequire } from 'node:module';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+
+import { startCell } from './cell.mjs';
+import { CHROMIUM_ARGS, Proc, stopAll } from './processes.mjs';
+
+const BIN = process.env.SMC_BIN_DIR ?? 'build/release/bin';
+const ARTIFACTS = process.env.SMC_ARTIFACTS_DIR ?? 'build/release/artifacts';
+const require = createRequire(join(process.env.SMC_NODE_MODULES ?? 'node_modules', 'x.js'));
+const { chromium } = require('playwright-core');
+
+const TOKEN = 'browser-test-token-5f2c9a71d3';
+const DEADLINE_MS = 58000;
+
+// smc2.grafcet declares steps 1..6 in order: step index i is step number i + 1.
+const stepsOfMask = (mask) => [...Array(64).keys()].filter((i) => (BigInt(mask) >> BigInt(i)) & 1n)
+  .map((i) => i + 1);
+
+function step(text) {
+  console.log(`[browser test] ${text}`);
+}
+
+let context = null;  // the browser, closed whatever happens
+
+async function main() {
+  const tmp = mkdtempSync(join(tmpdir(), 'smc-browser-'));
+  const partition = `browser-${process.pid}-${Date.now()}`;
+  const pageErrors = [];
+  try {
+    const tokens = join(tmp, 'tokens');
+    writeFileSync(tokens, `alice ${TOKEN}\n`);
+    chmodSync(tokens, 0o600);
+
+    step(`partition ${partition}: probe, cell and mills, dashboard`);
+    const probe = new Proc('probe', `${BIN}/smc-dashboard-probe`, ['--partition', partition, '--mill', 'mill-1']);
+    await probe.waitFor(/^ready$/, 10000);
+    await startCell({ binDir: BIN, partition, mills: 2 });
+    const dash = new Proc('dashboard', `${BIN}/smc-dashboard`,
+      ['--http', '127.0.0.1:0', '--partition', partition, '--token-file', tokens]);
+    const [, url] = await dash.waitFor(/listening on (http:\/\/\S+)/, 10000);
+
+    step(`chromium on ${url}`);
+    context = await chromium.launchPersistentContext(join(tmp, 'profile'), {
+      executablePath: '/usr/bin/chromium', headless: true, args: CHROMIUM_ARGS,
+      viewport: { width: 1600, height: 1150 },
+    });
+    const page = context.pages()[0] ?? await context.newPage();
+    page.on('pageerror', (e) => pageErrors.push(e.message));
+    page.on('console', (m) => {
+      // The refused command below is meant to log a 401.
+      if (m.type() === 'error' && !m.text().includes('status of 401')) pageErrors.push(m.text());
+    });
+    await page.goto(`${url}#/mill/mill-1`);
+
+    step('1. the page loads and draws the Grafcet of mill-1');
+    await page.waitForSelector('#mill-view[data-mill="mill-1"]');
+    await page.waitForFunction(() => document.querySelectorAll('svg.grafcet g.step').length === 6, null,
+      { timeout: 15000 });
+    assert.equal(await page.locator('#stream-state').textContent(), 'live');
+
+    step('2. the live chart receives new points');
+    await page.waitForFunction(() => window.smcApp.points('mill-1') > 5, null, { timeout: 10000 });
+    const before = await page.evaluate(() => ({ n: window.smcApp.points('mill-1'), t: window.smcApp.lastTime('mill-1') }));
+    await page.waitForFunction((b) => window.smcApp.points('mill-1') >= b.n + 10 && window.smcApp.lastTime('mill-1') > b.t + 0.3,
+      before, { timeout: 10000 });
+    assert.ok(await page.locator('#force-chart canvas').count() > 0, 'the F_Y chart is drawn');
+
+    step('3. the Grafcet view follows the supervisor (page vs DDS)');
+    const seen = new Set();
+    const until = Date.now() + 20000;
+    while (seen.size < 2 && Date.now() < until) {
+      const dds = probe.lines.filter((l) => l.startsWith('situation mill-1 ')).at(-1);
+      const onPage = await page.evaluate(() =>
+        [...document.querySelectorAll('svg.grafcet g.step.active')].map((g) => Number(g.dataset.step)));
+      if (dds) {
+        const expected = stepsOfMask(dds.match(/mask=(0x[0-9a-f]+)/)[1]);
+        if (JSON.stringify(expected) === JSON.stringify(onPage)) seen.add(onPage.join(','));
+      }
+      await page.waitForTimeout(40);
+    }
+    assert.ok(seen.size >= 2, `page matched DDS in ${seen.size} situation(s) only: ${[...seen]}`);
+
+    step('4. read-only until signed in; then feed hold from the page, checked on DDS');
+    assert.equal(await page.locator('#btn-feed-hold').isDisabled(), true, 'feed hold is disabled without a token');
+    const refused = await page.evaluate(async () => (await fetch('/api/mills/mill-1/commands', {
+      method: 'POST', headers: { 'Content-Type': 'application/json' }, body: '{"action":"feed_hold_on"}' })).status);
+    assert.equal(refused, 401);
+    await page.fill('#token-input', TOKEN);
+    await page.click('#signin button[type=submit]');
+    await page.waitForSelector('#operator-name:text("alice")');
+    await page.waitForFunction(() => !document.querySelector('#btn-feed-hold').disabled, null, { timeout: 5000 });
+    // Hold while cutting (step 4, in contact), as in the paper's runs: F_Y
+    // then stays at its last value while module I is off.
+    await page.waitForFunction(() => window.smcApp.activeSteps('mill-1').includes(4) &&
+      window.smcApp.store.mills.get('mill-1').summary?.in_contact, null, { timeout: 20000 });
+    const mark = probe.lines.length;
+    await page.click('#btn-feed-hold');
+    await probe.waitFor(/^command mill-1 OP_FEED_HOLD_ON alice \d+$/, 5000, mark);
+    await probe.waitFor(/^situation mill-1 mask=0x10 modules=ABC$/, 5000, mark);  // step 5, module C
+    await probe.waitFor(/^status mill-1 EDGE_FEED_HOLD$/, 5000, mark);
+    assert.equal(probe.lines.slice(0, mark).filter((l) => l.startsWith('command ')).length, 0,
+      'no command reached DDS before the signed-in click');
+    await page.waitForSelector('svg.grafcet g.step.active[data-step="5"]', { timeout: 5000 });
+    await page.waitForSelector('#edge-badge [data-edge-state="EDGE_FEED_HOLD"]', { timeout: 5000 });
+    await page.waitForSelector('.toast.ok', { timeout: 5000 });
+
+    step('5. screenshot');
+    await page.waitForTimeout(1200);  // let the feed-hold span show on the chart
+    mkdirSync(ARTIFACTS, { recursive: true });
+    const shot = join(ARTIFACTS, 'dashboard.png');
+    await page.screenshot({ path: shot, fullPage: true });
+    step(`saved ${shot}`);
+
+    const mark2 = probe.lines.length;
+    await page.click('#btn-release');
+    await probe.waitFor(/^command mill-1 OP_FEED_HOLD_OFF alice \d+$/, 5000, mark2);
+    await probe.waitFor(/^situation mill-1 mask=0x[0-9a-f]+ modules=AB(?!C)/, 5000, mark2);
+    await page.waitForFunction(() => !document.querySelector('svg.grafcet g.step.active[data-step="5"]'), null,
+      { timeout: 5000 });
+
+    await page.goto(`${url}#/`);
+    await page.waitForSelector('.mill-card[data-mill="mill-2"]', { timeout: 5000 });
+    await page.screenshot({ path: join(ARTIFACTS, 'dashboard-cell.png'), fullPage: true });
+
+    assert.deepEqual(pageErrors, [], 'no errors in the page');
+    step('PASS');
+  } finally {
+    if (context) await context.close().catch(() => {});
+    await stopAll();
+    rmSync(tmp, { recursive: true, force: true });
+  }
+}
+
+const watchdog = setTimeout(async () => {
+  console.error(`[browser test] FAIL: not done within ${DEADLINE_MS} ms`);
+  if (context) await context.close().catch(() => {});
+  await stopAll();
+  process.exit(1);
+}, DEADLINE_MS);
+for (const sig of ['SIGINT', 'SIGTERM']) {
+  process.on(sig, async () => {
+    if (context) await context.close().catch(() => {});
+    await stopAll();
+    process.exit(1);
+  });
+}
+
+main().then(() => {
+  clearTimeout(watchdog);
+  process.exit(0);
+}, (e) => {
+  clearTimeout(watchdog);
+  console.error(`[browser test] FAIL: ${e.stack ?? e}`);
+  process.exit(1);
+});
