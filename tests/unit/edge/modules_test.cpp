@@ -143,7 +143,9 @@ TEST(ParameterEstimator, ConvergesToTheProcessGainWithForgetting) {
     s.f_y_peak_n = theta * std::pow(f, p.adaptive_feed_exponent);
     s.f_y_updated = true;
     ASSERT_EQ(h.update(s), Status::kOk);
-    if (k == 29) EXPECT_NEAR(s.gain_estimate, 500, 1.0);
+    if (k == 29) {
+      EXPECT_NEAR(s.gain_estimate, 500, 1.0);
+    }
   }
   EXPECT_NEAR(s.gain_estimate, 900, 1.0);
   EXPECT_TRUE(s.gain_valid);
