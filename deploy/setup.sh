@@ -21,6 +21,8 @@ packages=(
   rt-tests
   # dashboard: Boost.Beast (headers), the page's npm packages, the browser test
   libboost-dev ca-certificates chromium
+  # containerised integration tests (tests/integration/containers)
+  podman podman-compose debootstrap runc curl
 )
 # Node.js and npm: Debian's, unless the machine already has them (a Node.js
 # from elsewhere bundles its own npm and conflicts with Debian's npm package).

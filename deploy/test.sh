@@ -22,4 +22,11 @@ cmake --build --preset release
 echo "== tests"
 ctest --preset release "$@"
 
+# The cell as containers on an internal network, with faults (or, where
+# podman cannot run, one network namespace per service; it says which).
+if [[ $# -eq 0 ]]; then
+  echo "== containerised integration tests"
+  tests/integration/containers/run.sh
+fi
+
 echo "== all tests done in $(( $(date +%s) - start )) s"

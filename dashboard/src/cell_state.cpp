@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <deque>
 #include <map>
+#include <set>
 
 #include "grafcet_view.hpp"
 #include "json.hpp"
@@ -142,6 +143,10 @@ struct CellState::Mill {
   std::deque<std::string> batches;
   std::deque<std::string> chatter;
   std::uint64_t chatter_total = 0;
+  // Event ids seen: an edge's transient-local writer delivers its events
+  // again after a reconnection (a cut link, a restarted dashboard), and an
+  // event must count once.
+  std::set<std::uint64_t> chatter_seen;
   std::string job_id;  // latest job reported by JobProgress / EdgeStatus
 };
 
@@ -455,6 +460,7 @@ std::vector<Event> CellState::on_chatter(const smc_data_ChatterEvent& e) {
   Mill* m = impl_->mill(id, events);
   if (m == nullptr) return events;
   ++impl_->counters.samples;
+  if (!m->chatter_seen.insert(e.event_id).second) return events;  // a repeat
   ++m->chatter_total;
   push_bounded(m->chatter, w.str(), impl_->limits.chatter_events);
   events.push_back(make_event(EventKind::kChatter, id, w.str()));

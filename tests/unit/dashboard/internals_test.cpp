@@ -148,3 +148,22 @@ TEST(CellState, ForgetsFinishedJobsFirstPastTheLimit) {
   EXPECT_NE(jobs.find("run-1"), std::string::npos);
   EXPECT_NE(jobs.find("run-3"), std::string::npos);
 }
+
+TEST(CellState, AChatterEventDeliveredAgainCountsOnce) {
+  // A reconnection (cut link, restarted dashboard) makes the edge's
+  // transient-local writer deliver its events again.
+  smc::dashboard::CellState state;
+  smc_data_ChatterEvent e{};
+  smc::wire::set_string(e.machine_id, "m1");
+  e.event_id = 42;
+  e.source = smc_data_CHATTER_AUTOMATIC;
+  auto first = state.on_chatter(e);
+  ASSERT_FALSE(first.empty());
+  EXPECT_EQ(first.back().kind, smc::dashboard::EventKind::kChatter);
+  EXPECT_TRUE(state.on_chatter(e).empty()) << "a repeat must not be streamed again";
+  e.event_id = 43;
+  EXPECT_FALSE(state.on_chatter(e).empty());
+  const auto mill = state.mill_json("m1");
+  ASSERT_TRUE(mill.has_value());
+  EXPECT_NE(mill->find(R"("chatter_events":2)"), std::string::npos) << *mill;
+}
