@@ -59,10 +59,12 @@ class Cell : public ::testing::Test {
                                            "--partition", partition_, "--edge-grace-ms", "1500"});
   }
   void start_edge(const std::string& machine) {
+    edges_[machine].reset();
     edges_[machine].emplace(std::vector<std::string>{
         bin("smc-edge"), "--log-level", "warn", "run", "--machine", machine, "--partition",
         partition_, "--speedup", "8", "--lease-ms", "1000", "--no-realtime", "--mill-model",
-        src("cell/models/paper_face_mill.textproto")});
+        src("cell/models/paper_face_mill.textproto"), "--state-file",
+        (dir_ / (machine + ".journal")).string()});
   }
   std::string submit(const std::string& file) {
     auto before = jobs();
@@ -194,6 +196,21 @@ TEST_F(Cell, KilledEdgeInterruptsItsJobWhichIsRequeued) {
   EXPECT_EQ(job(js)->machine_id, "mill-2");
   EXPECT_EQ(job(js)->attempt, 2u);
   std::printf("edge loss detected in %.2f s\n", detect_s);
+}
+
+TEST_F(Cell, EdgeRestartedMidJobDoesNotCutTheSameAttemptAgain) {
+  start_cell();
+  start_edge("mill-1");
+  const std::string js = submit("cell/jobs/job_shop.json");
+  ASSERT_TRUE(wait_jobs({js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+  edges_["mill-1"]->kill(SIGKILL);
+  edges_["mill-1"]->wait();
+  start_edge("mill-1");  // at once: well within the lease and the grace
+  ASSERT_TRUE(wait_jobs({js}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 120s));
+  const auto ev = events(js);
+  EXPECT_EQ(count_to(ev, cfg::JOB_INTERRUPTED), 1) << "the restart is reported, not hidden";
+  EXPECT_EQ(count_to(ev, cfg::JOB_RUNNING), 2);
+  EXPECT_EQ(job(js)->attempt, 2u) << "attempt 1 is never cut again";
 }
 
 TEST_F(Cell, InvalidConfigurationIsRejectedAndReported) {

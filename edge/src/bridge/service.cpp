@@ -2,8 +2,12 @@
 
 #include <spdlog/spdlog.h>
 
+#include <unistd.h>
+
 #include <chrono>
+#include <cstdio>
 #include <map>
+#include <stdexcept>
 #include <optional>
 #include <set>
 #include <thread>
@@ -103,7 +107,9 @@ struct EdgeService::Impl {
   std::optional<smc::config::SupervisorConfig> config;   // in force
   std::optional<smc::config::SupervisorConfig> pending;  // accepted during a job
   std::optional<smc::config::JobAssignment> waiting;     // assignment waiting for its config
-  std::set<std::string> started;                         // "job#attempt" run by this process
+  std::set<std::string> started;                         // "job#attempt" started (journal included)
+  std::set<std::string> journalled;                      // of those, started by an earlier run
+  std::set<std::string> reported;                        // earlier runs' jobs reported interrupted
   std::unique_ptr<RunningJob> job;
   OperatorInputs operator_inputs;
   smc_data_EdgeState state = smc_data_EDGE_IDLE;
@@ -139,9 +145,42 @@ struct EdgeService::Impl {
         program_topic(participant, smc::wire::kProgramTopic),
         program_writer(program_topic, kProgramSchema),
         waitset(participant) {
+    load_journal();
     waitset.attach(config_reader.reader(), 1);
     waitset.attach(job_reader.reader(), 2);
     waitset.attach(command_reader, 3);
+  }
+
+  // ----------------------------------------------------------- journal --
+
+  void load_journal() {
+    if (opt.state_file.empty()) return;
+    std::FILE* f = std::fopen(opt.state_file.c_str(), "r");
+    if (f == nullptr) return;  // first run
+    char line[256];
+    while (std::fgets(line, sizeof line, f) != nullptr) {
+      std::string tag(line);
+      while (!tag.empty() && (tag.back() == '\n' || tag.back() == '\r')) tag.pop_back();
+      if (tag.empty()) continue;
+      started.insert(tag);
+      journalled.insert(tag);
+    }
+    std::fclose(f);
+    spdlog::info("{}: journal {}: {} job attempt(s) started by earlier runs", opt.machine_id,
+                 opt.state_file, journalled.size());
+  }
+
+  // Durable before the job starts: a crash right after must not lose it.
+  void journal(const std::string& tag) {
+    if (opt.state_file.empty()) return;
+    std::FILE* f = std::fopen(opt.state_file.c_str(), "a");
+    if (f == nullptr) {
+      throw std::runtime_error(opt.state_file + ": cannot append to the edge's journal");
+    }
+    std::fprintf(f, "%s\n", tag.c_str());
+    std::fflush(f);
+    ::fsync(::fileno(f));
+    std::fclose(f);
   }
 
   // ------------------------------------------------------------ status --
@@ -250,6 +289,12 @@ struct EdgeService::Impl {
     if (!waiting || job) return;
     const std::string tag = waiting->job_id() + "#" + std::to_string(waiting->attempt());
     if (started.count(tag)) {
+      // Started by an earlier run of this edge (it crashed or was restarted
+      // mid-job): the part is half cut, so the job is not run again; the cell
+      // hears it was interrupted and re-queues it under its policy.
+      if (journalled.count(tag) && reported.insert(tag).second) {
+        report_interrupted(waiting->job_id(), "edge restarted during this attempt");
+      }
       waiting.reset();
       return;
     }
@@ -278,7 +323,9 @@ struct EdgeService::Impl {
     }
     ro.overrun_threshold = opt.overrun_threshold;
     j->rt = std::make_unique<RealTimeEdge>(*j->core, ro, clock);
-    started.insert(a.job_id() + "#" + std::to_string(a.attempt()));
+    const std::string tag = a.job_id() + "#" + std::to_string(a.attempt());
+    journal(tag);
+    started.insert(tag);
     job = std::move(j);
     operator_inputs = OperatorInputs{};
     job->rt->push_operator_inputs(operator_inputs);
@@ -306,6 +353,17 @@ struct EdgeService::Impl {
     }
     set_state(smc_data_EDGE_RUNNING, "running job " + a.job_id());
     publish_progress(smc_data_JOB_RUNNING, "started");
+  }
+
+  void report_interrupted(const std::string& job_id, const std::string& why) {
+    smc_data_JobProgress p{};
+    set_string(p.machine_id, opt.machine_id);
+    set_string(p.job_id, job_id);
+    p.phase = smc_data_JOB_INTERRUPTED;
+    set_string(p.message, why);
+    progress_writer.write(p);
+    spdlog::warn("{}: job {} was started by an earlier run of this edge: reported interrupted",
+                 opt.machine_id, job_id);
   }
 
   void publish_progress(smc_data_JobPhase phase, const std::string& why) {

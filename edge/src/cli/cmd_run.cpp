@@ -43,6 +43,9 @@ void add_run(CLI::App& app) {
                   "The simulated mill's own milling model (default: the configuration's)")
       ->check(CLI::ExistingFile);
   sub->add_flag("--no-realtime", *no_rt, "Do not ask for SCHED_FIFO and mlockall");
+  sub->add_option("--state-file", opt->state_file,
+                  "Journal of the job attempts this edge started, kept across restarts: one\n"
+                  "started by an earlier run is reported interrupted, never cut again");
   sub->add_flag("--paced", opt->paced,
                 "Run the simulated mill paced to the wall clock instead of in the real-time loop\n"
                 "(no deadlines, no overrun holds; implied by --speedup other than 1)");

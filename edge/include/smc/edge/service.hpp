@@ -39,6 +39,11 @@ struct ServiceOptions {
   // A tick this late is an overrun, which holds the feed (real-time loop).
   std::chrono::microseconds overrun_threshold{2000};
   std::string mill_model_file;               // the mill's own model; default: the config's
+  // Journal of the (job, attempt)s this edge has started, kept across
+  // restarts: an assignment started by an earlier run of the process is not
+  // run again but reported interrupted, so the cell re-queues it. Empty:
+  // remembered in memory only.
+  std::string state_file;
 };
 
 class EdgeService {
