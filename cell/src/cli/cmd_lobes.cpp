@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "model_file.hpp"
 #include "registry.hpp"
 #include "smc/common/csv.hpp"
 #include "smc/common/svg_plot.hpp"
@@ -41,16 +42,6 @@ struct LobesArgs {
   std::string svg = "lobes.svg";
 };
 
-mc::MillingModel load_model(const std::string& file) {
-  if (file.empty()) return mc::paper_case();
-  try {
-    return mc::load_milling_model(file);
-  } catch (const std::exception& e) {
-    throw Failure(2, std::string(e.what()) +
-                         "\n(fix the file, or leave out --model to use the paper's case)");
-  }
-}
-
 void positive(const char* flag, double v) {
   if (!(std::isfinite(v) && v > 0)) {
     throw Failure(2, std::string(flag) + ": must be > 0, got " + std::to_string(v));
@@ -58,7 +49,7 @@ void positive(const char* flag, double v) {
 }
 
 void run(const LobesArgs& a) {
-  const mc::MillingModel model = load_model(a.model_file);
+  const mc::MillingModel model = smc::cell::cli::load_model_or_paper_case(a.model_file);
   const double ref_rpm = model.reference_cut ? model.reference_cut->spindle_rpm : 0;
   double rpm_min = a.rpm_min > 0 ? a.rpm_min : 0.5 * ref_rpm;
   double rpm_max = a.rpm_max > 0 ? a.rpm_max : 2.0 * ref_rpm;

@@ -12,6 +12,7 @@
 #include <memory>
 #include <string>
 
+#include "model_file.hpp"
 #include "registry.hpp"
 #include "smc/common/csv.hpp"
 #include "smc/common/svg_plot.hpp"
@@ -38,18 +39,8 @@ struct TdsArgs {
   std::string svg = "tds.svg";
 };
 
-mc::MillingModel load_model(const std::string& file) {
-  if (file.empty()) return mc::paper_case();
-  try {
-    return mc::load_milling_model(file);
-  } catch (const std::exception& e) {
-    throw Failure(2, std::string(e.what()) +
-                         "\n(fix the file, or leave out --model to use the paper's case)");
-  }
-}
-
 void run(const TdsArgs& a) {
-  const mc::MillingModel model = load_model(a.model_file);
+  const mc::MillingModel model = smc::cell::cli::load_model_or_paper_case(a.model_file);
   const auto& ref = model.reference_cut;
   const double rpm = a.rpm > 0 ? a.rpm : (ref ? ref->spindle_rpm : 0);
   if (!(rpm > 0)) {
