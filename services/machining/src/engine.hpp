@@ -48,6 +48,9 @@ class CutEngine {
         length_mm_(model.workpiece.length_mm),
         band_lo_mm_(model.workpiece.offset_mm - model.workpiece.width_mm / 2),
         band_hi_mm_(model.workpiece.offset_mm + model.workpiece.width_mm / 2),
+        teeth_(model.cutter.teeth),
+        offset_cos_(static_cast<std::size_t>(model.cutter.teeth)),
+        offset_sin_(static_cast<std::size_t>(model.cutter.teeth)),
         sense_(rotation_sense(model.workpiece)),
         sense_d_(sense_),
         law_(model.law),
@@ -55,6 +58,12 @@ class CutEngine {
     const double lead = model.cutter.lead_angle_deg * 3.14159265358979323846 / 180.0;
     cos_lead_ = std::cos(lead);
     sin_lead_ = std::sin(lead);
+    tan_lead_ = sin_lead_ / cos_lead_;  // lead < 90 degrees (validated)
+    for (int i = 0; i < teeth_; ++i) {
+      const double a = 2 * 3.14159265358979323846 * i / teeth_;
+      offset_cos_[static_cast<std::size_t>(i)] = std::cos(a);
+      offset_sin_[static_cast<std::size_t>(i)] = std::sin(a);
+    }
   }
 
   StructureModel& structure() noexcept { return structure_; }
@@ -92,11 +101,14 @@ class CutEngine {
       ca_ = l.k_a_n_per_mm2 * depth_mm;
       et_ = en_ = 1.0;
     }
+    st_coef_ = sense_d_ * ct_;
+    fr_coef_ = cos_lead_ * cn_;
   }
 
   // Forces of the teeth for displacement change (dux, duy) since one delay
-  // earlier; cos_t/sin_t: each tooth's angle; tool_x_mm: cutter axis along
-  // the feed (checked against the part's length unless check_length is false).
+  // earlier; (c0, s0): tooth 0's direction (cos, sin of its angle), tooth i
+  // being 2 pi i / teeth further on; tool_x_mm: cutter axis along the feed
+  // (checked against the part's length unless check_length is false).
   //
   // half_sweep_rad: half the angle a tooth turns during the step. A tooth
   // whose tip crosses an edge of the part's width band during the step cuts
@@ -104,18 +116,26 @@ class CutEngine {
   // linear in time over the step), so that the time in cut, and with it the
   // impulse of an interrupted cut, is exact to second order rather than
   // quantised to whole steps. 0: the indicator at the instant.
-  StepForces tooth_forces(const double* cos_t, const double* sin_t, int teeth, double tool_x_mm,
-                          bool check_length, double dux, double duy,
-                          double half_sweep_rad = 0) const noexcept {
+  StepForces tooth_forces(double c0, double s0, double tool_x_mm, bool check_length, double dux,
+                          double duy, double half_sweep_rad = 0) const noexcept {
     StepForces f;
     if (!active_) return f;
-    for (int i = 0; i < teeth; ++i) {
-      const double c = cos_t[i];
+    const double* __restrict oc = offset_cos_.data();
+    const double* __restrict os = offset_sin_.data();
+    const double r_sweep = radius_mm_ * half_sweep_rad;
+    // A cutting tooth's tip is ahead of the axis by at most the radius: with
+    // [axis, axis + radius] over the part no tooth needs the check.
+    const bool whole_length =
+        !check_length || (tool_x_mm >= 0 && tool_x_mm + radius_mm_ <= length_mm_);
+    double tangential = 0;  // sum of sense x F_t
+    for (int i = 0; i < teeth_; ++i) {
+      const auto ii = static_cast<std::size_t>(i);
+      const double c = c0 * oc[ii] - s0 * os[ii];
       if (c <= 0) continue;  // trailing half: that material is gone
-      const double s = sin_t[i];
+      const double s = s0 * oc[ii] + c0 * os[ii];
       const double y = radius_mm_ * s;
       double weight = 1.0;
-      const double dy = radius_mm_ * c * half_sweep_rad;  // y's change over half the step
+      const double dy = r_sweep * c;  // y's change over half the step
       if (y - dy < band_lo_mm_ || y + dy > band_hi_mm_) {
         if (dy > 0) {
           const double overlap = std::min(y + dy, band_hi_mm_) - std::max(y - dy, band_lo_mm_);
@@ -125,7 +145,7 @@ class CutEngine {
           continue;
         }
       }
-      if (check_length) {
+      if (!whole_length) {
         const double xt = tool_x_mm + radius_mm_ * c;
         if (xt < 0 || xt > length_mm_) continue;
       }
@@ -135,25 +155,27 @@ class CutEngine {
         if (nominal >= half_feed_mm_ && feed_mm_ > 0) f.jumped_out = true;
         continue;
       }
-      double ft, fn;
+      // st = sense F_t, fr = F_n cos(lead) (radial); the constants are
+      // multiplied in while the chip is still being computed.
+      double st, fr;
       if (power_law_) {
-        pow_(chip, ft, fn);  // chip^et, chip^en
-        ft *= ct_;
-        fn *= cn_;
+        const PowPair::Pair p = pow_(chip, PowPair::Pair{st_coef_ * weight, fr_coef_ * weight});
+        st = p[0];
+        fr = p[1];
+        f.fz_n += fr * tan_lead_;
       } else {
-        ft = ct_ * chip;
-        fn = cn_ * chip;
+        st = st_coef_ * weight * chip;
+        fr = fr_coef_ * weight * chip;
+        f.fz_n += fr * tan_lead_ + weight * ca_ * chip;
       }
-      ft *= weight;
-      fn *= weight;
-      const double fr = fn * cos_lead_;
-      const double st = sense_d_ * ft;
-      f.fx_n += -fr * c + st * s;
-      f.fy_n += -fr * s - st * c;
-      f.fz_n += fn * sin_lead_ + weight * ca_ * chip;
-      f.tangential_sum_n += ft;
+      // F_x = -F_n cos(lead) cos(theta) + sense F_t sin(theta),
+      // F_y = -F_n cos(lead) sin(theta) - sense F_t cos(theta), F_z = F_n sin(lead).
+      f.fx_n += st * s - fr * c;
+      f.fy_n -= fr * s + st * c;
+      tangential += st;
       ++f.teeth_cutting;
     }
+    f.tangential_sum_n = sense_d_ * tangential;
     return f;
   }
 
@@ -185,9 +207,8 @@ class CutEngine {
   // regenerative = false: the chip is the nominal one (the history is still
   // recorded), for running a cut onto its chatter-free periodic motion.
   // half_sweep_rad: see tooth_forces().
-  StepForces step(const double* cos_mid, const double* sin_mid, int teeth, double tool_x_mid_mm,
-                  bool check_length, double delay_steps, double half_sweep_rad,
-                  bool regenerative = true) noexcept {
+  StepForces step(double c0_mid, double s0_mid, double tool_x_mid_mm, bool check_length,
+                  double delay_steps, double half_sweep_rad, bool regenerative = true) noexcept {
     double mx, my;
     structure_.predict_half_step(prev_fx_, prev_fy_, mx, my);
     double dx = mx, dy = my;
@@ -196,8 +217,8 @@ class CutEngine {
     history_[slot] = mx;
     history_[slot + 1] = my;
     ++count_;
-    const StepForces f = tooth_forces(cos_mid, sin_mid, teeth, tool_x_mid_mm, check_length, mx - dx,
-                                      my - dy, half_sweep_rad);
+    const StepForces f =
+        tooth_forces(c0_mid, s0_mid, tool_x_mid_mm, check_length, mx - dx, my - dy, half_sweep_rad);
     structure_.step(f.fx_n, f.fy_n);
     prev_fx_ = f.fx_n;
     prev_fy_ = f.fy_n;
@@ -206,13 +227,13 @@ class CutEngine {
 
   // Forces at the current instant (the end of the last step), for sampled
   // outputs: exact displacement now, delayed value interpolated.
-  StepForces forces_now(const double* cos_t, const double* sin_t, int teeth, double tool_x_mm,
-                        bool check_length, double delay_steps) const noexcept {
+  StepForces forces_now(double c0, double s0, double tool_x_mm, bool check_length,
+                        double delay_steps) const noexcept {
     double ux, uy;
     structure_.relative(ux, uy);
     double dx, dy;
     delayed(static_cast<double>(count_) - 0.5 - delay_steps, dx, dy);
-    return tooth_forces(cos_t, sin_t, teeth, tool_x_mm, check_length, ux - dx, uy - dy);
+    return tooth_forces(c0, s0, tool_x_mm, check_length, ux - dx, uy - dy);
   }
 
   // 1 + feed exponent of the cutting (or thrust) pressure: the power of the
@@ -248,16 +269,19 @@ class CutEngine {
   double prev_fx_ = 0, prev_fy_ = 0;
 
   double radius_mm_, length_mm_, band_lo_mm_, band_hi_mm_;
+  int teeth_;
+  std::vector<double> offset_cos_, offset_sin_;  // tooth i's angle from tooth 0's
   int sense_;
   double sense_d_;
   CuttingLaw law_;
   PowPair pow_;
-  double cos_lead_ = 1, sin_lead_ = 0;
+  double cos_lead_ = 1, sin_lead_ = 0, tan_lead_ = 0;
 
   bool active_ = false;
   bool power_law_ = true;
   double feed_mm_ = 0, half_feed_mm_ = 0;
   double ct_ = 0, cn_ = 0, ca_ = 0, et_ = 1, en_ = 1;
+  double st_coef_ = 0, fr_coef_ = 0;  // sense ct, cos(lead) cn
 };
 
 }  // namespace smc::machining::detail

@@ -9,6 +9,7 @@
 
 #include "engine.hpp"
 #include "format.hpp"
+#include "multiversion.hpp"
 
 namespace smc::machining {
 
@@ -31,28 +32,14 @@ struct MillSimulator::Impl {
         steps_per_sample(steps),
         teeth(m.cutter.teeth),
         engine(m, h, history_for(m, o.min_spindle_rpm, h)),
-        tooth_cos(static_cast<std::size_t>(teeth)),
-        tooth_sin(static_cast<std::size_t>(teeth)),
-        offset_cos(static_cast<std::size_t>(teeth)),
-        offset_sin(static_cast<std::size_t>(teeth)),
-        cos_now(static_cast<std::size_t>(teeth)),
-        sin_now(static_cast<std::size_t>(teeth)),
         position_mm(o.initial_tool_position_mm) {
-    for (int i = 0; i < teeth; ++i) {
-      const double a = kTwoPi * i / teeth;
-      offset_cos[static_cast<std::size_t>(i)] = std::cos(a);
-      offset_sin[static_cast<std::size_t>(i)] = std::sin(a);
-    }
     max_delay_steps = static_cast<double>(engine.history_capacity() - 3);
   }
 
-  // Tooth i's (cos, sin) from tooth 0's.
-  void spread(double c0, double s0, double* c, double* s) const noexcept {
-    for (std::size_t i = 0; i < static_cast<std::size_t>(teeth); ++i) {
-      c[i] = c0 * offset_cos[i] - s0 * offset_sin[i];
-      s[i] = s0 * offset_cos[i] + c0 * offset_sin[i];
-    }
-  }
+  // One sample (MillSimulator::step); trace: nullptr or where the force of
+  // each internal step goes.
+  SMC_MULTIVERSION static std::uint32_t step(Impl& s, const SampleInput& input, Sample& out,
+                                             const StepForceTrace* trace) noexcept;
 
   MillingModel model;
   SimulatorOptions options;
@@ -60,15 +47,15 @@ struct MillSimulator::Impl {
   int steps_per_sample;
   int teeth;
   detail::CutEngine engine;
-  std::vector<double> tooth_cos, tooth_sin, offset_cos, offset_sin, cos_now, sin_now;
   double max_delay_steps = 0;
   double position_mm;
   double spindle_angle_rad = 0;  // tooth 0
   std::int64_t samples = 0;
-  // Cached per operating point / spindle speed (NaN: nothing cached yet).
-  double op_rpm = kNaN, op_feed = kNaN, op_depth = kNaN;
-  double rot_rpm = kNaN, dtheta = 0, rc = 1, rs = 0, hc = 1, hs = 0;
-  double delay_rpm = kNaN, delay_steps = 0;
+  // Cached per input (feedrate, rpm, depth) (NaN: nothing cached yet).
+  double in_feedrate = kNaN, in_rpm = kNaN, in_depth = kNaN;
+  double feed_tooth = 0, v_m_s = 0, dx = 0, delay_steps = 0, half_sweep = 0;
+  bool below_min_spindle = false;
+  double dtheta = kNaN, rc = 1, rs = 0, hc = 1, hs = 0;
   double dir_c = 1, dir_s = 0;  // tooth 0's direction at the end of the last sample
   int calls_since_sync = 0;
 };
@@ -105,7 +92,16 @@ MillSimulator::MillSimulator(MillSimulator&&) noexcept = default;
 MillSimulator& MillSimulator::operator=(MillSimulator&&) noexcept = default;
 
 std::uint32_t MillSimulator::step(const SampleInput& input, Sample& out) noexcept {
-  Impl& s = *impl_;
+  return Impl::step(*impl_, input, out, nullptr);
+}
+
+std::uint32_t MillSimulator::step(const SampleInput& input, Sample& out,
+                                  const StepForceTrace& trace) noexcept {
+  return Impl::step(*impl_, input, out, &trace);
+}
+
+std::uint32_t MillSimulator::Impl::step(Impl& s, const SampleInput& input, Sample& out,
+                                        const StepForceTrace* trace) noexcept {
   std::uint32_t status = 0;
   double feedrate = input.feedrate_mm_s;
   double rpm = input.spindle_rpm;
@@ -117,47 +113,41 @@ std::uint32_t MillSimulator::step(const SampleInput& input, Sample& out) noexcep
     rpm = 0;
     depth = 0;
   }
-  const int n_teeth = s.teeth;
-  const double h = s.step_s;
-  const double feed_tooth = feed_per_tooth_mm(feedrate, rpm, n_teeth);
-  if (rpm != s.op_rpm || feed_tooth != s.op_feed || depth != s.op_depth) {
-    s.engine.set_operating_point(rpm, feed_tooth, depth);  // pow calls: only on a change
-    s.op_rpm = rpm;
-    s.op_feed = feed_tooth;
-    s.op_depth = depth;
+  // Everything that depends only on the inputs is cached, and recomputed
+  // (pow, sin and cos calls among it) only when an input changes: a
+  // caller stepping at constant conditions pays none of it.
+  if (feedrate != s.in_feedrate || rpm != s.in_rpm || depth != s.in_depth) {
+    s.in_feedrate = feedrate;
+    s.in_rpm = rpm;
+    s.in_depth = depth;
+    s.feed_tooth = feed_per_tooth_mm(feedrate, rpm, s.teeth);
+    s.engine.set_operating_point(rpm, s.feed_tooth, depth);
+    s.v_m_s = cutting_speed_m_per_s(s.engine.radius_mm(), rpm);
+    s.dx = feedrate * s.step_s;
+    s.delay_steps = rpm > 0 ? delay_s(s.model, rpm) / s.step_s : 0;
+    s.below_min_spindle = s.delay_steps > s.max_delay_steps;
+    if (s.below_min_spindle) s.delay_steps = s.max_delay_steps;
+    // The spindle's rotation per step; tooth 0's direction is kept as a unit
+    // vector rotated step by step (resynchronised from the angle when the
+    // speed changes and every 4096 calls).
+    const double dtheta = s.engine.sense() * kTwoPi * rpm / 60.0 * s.step_s;
+    if (dtheta != s.dtheta) {
+      s.dtheta = dtheta;
+      s.rc = std::cos(dtheta);
+      s.rs = std::sin(dtheta);
+      s.hc = std::cos(dtheta / 2);
+      s.hs = std::sin(dtheta / 2);
+      s.calls_since_sync = kResyncCalls;
+    }
+    s.half_sweep = std::abs(dtheta) / 2;
   }
-
-  // Delay in internal steps.
-  double delay_steps = 0;
-  if (rpm > 0) {
-    if (rpm != s.delay_rpm) {
-      s.delay_rpm = rpm;
-      s.delay_steps = delay_s(s.model, rpm) / h;
-    }
-    delay_steps = s.delay_steps;
-    if (delay_steps > s.max_delay_steps) {
-      delay_steps = s.max_delay_steps;
-      status |= StepStatus::kBelowMinSpindle;
-    }
-  } else if (feedrate > 0 && depth > 0) {
+  if (s.below_min_spindle) status |= StepStatus::kBelowMinSpindle;
+  if (rpm == 0 && feedrate > 0 && depth > 0) {
     // Feeding with the spindle stopped: a crash if the cutter overlaps the part.
     const double r = s.engine.radius_mm();
     if (s.position_mm + r >= 0 && s.position_mm - r <= s.model.workpiece.length_mm) {
       status |= StepStatus::kSpindleStoppedInCut;
     }
-  }
-  // The spindle's rotation per step, and tooth 0's direction kept as a unit
-  // vector rotated step by step (resynchronised from the angle when the speed
-  // changes and every 4096 calls).
-  if (rpm != s.rot_rpm) {
-    const double dtheta = s.engine.sense() * kTwoPi * rpm / 60.0 * h;
-    s.rot_rpm = rpm;
-    s.dtheta = dtheta;
-    s.rc = std::cos(dtheta);
-    s.rs = std::sin(dtheta);
-    s.hc = std::cos(dtheta / 2);
-    s.hs = std::sin(dtheta / 2);
-    s.calls_since_sync = kResyncCalls;
   }
   if (++s.calls_since_sync >= kResyncCalls) {
     s.dir_c = std::cos(s.spindle_angle_rad);
@@ -167,18 +157,22 @@ std::uint32_t MillSimulator::step(const SampleInput& input, Sample& out) noexcep
   // Tooth 0 at the middle of the first step.
   double c0 = s.dir_c * s.hc - s.dir_s * s.hs;
   double s0 = s.dir_s * s.hc + s.dir_c * s.hs;
-  const double v_m_s = cutting_speed_m_per_s(s.engine.radius_mm(), rpm);
-  const double dx = feedrate * h;
-  const double half_sweep = std::abs(s.dtheta) / 2;
+  const double v_m_s = s.v_m_s;
+  const double dx = s.dx;
+  const double delay_steps = s.delay_steps;
+  const double half_sweep = s.half_sweep;
 
   double power_sum = 0;
   double max_abs_fy = 0;
   detail::StepForces last;
-  double* tc = s.tooth_cos.data();
-  double* ts = s.tooth_sin.data();
   for (int k = 0; k < s.steps_per_sample; ++k) {
-    s.spread(c0, s0, tc, ts);
-    last = s.engine.step(tc, ts, n_teeth, s.position_mm + dx / 2, true, delay_steps, half_sweep);
+    last = s.engine.step(c0, s0, s.position_mm + dx / 2, true, delay_steps, half_sweep);
+    if (trace != nullptr) {
+      const auto i = static_cast<std::size_t>(k);
+      trace->fx_n[i] = last.fx_n;
+      trace->fy_n[i] = last.fy_n;
+      trace->fz_n[i] = last.fz_n;
+    }
     s.position_mm += dx;
     power_sum += last.tangential_sum_n * v_m_s;
     max_abs_fy = std::max(max_abs_fy, std::abs(last.fy_n));
@@ -203,14 +197,18 @@ std::uint32_t MillSimulator::step(const SampleInput& input, Sample& out) noexcep
     power_sum = 0;
     max_abs_fy = 0;
     last = detail::StepForces{};
+    if (trace != nullptr) {
+      // No non-finite value leaves: a caller's filters would keep it forever.
+      for (std::size_t i = 0; i < static_cast<std::size_t>(s.steps_per_sample); ++i) {
+        trace->fx_n[i] = trace->fy_n[i] = trace->fz_n[i] = 0;
+      }
+    }
   }
 
   // Outputs at the sample instant.
   detail::StepForces now = last;
   if (s.options.forces_at_sample_instant) {
-    s.spread(s.dir_c, s.dir_s, s.cos_now.data(), s.sin_now.data());
-    now = s.engine.forces_now(s.cos_now.data(), s.sin_now.data(), n_teeth, s.position_mm, true,
-                              delay_steps);
+    now = s.engine.forces_now(s.dir_c, s.dir_s, s.position_mm, true, delay_steps);
   }
   const Displacements d = s.engine.structure().displacements();
   out.time_s = static_cast<double>(s.samples) * s.options.sample_period_s;
@@ -225,7 +223,7 @@ std::uint32_t MillSimulator::step(const SampleInput& input, Sample& out) noexcep
   out.part_x_mm = d.part_x_mm;
   out.part_y_mm = d.part_y_mm;
   out.tool_position_mm = s.position_mm;
-  out.feed_per_tooth_mm = feed_tooth;
+  out.feed_per_tooth_mm = s.feed_tooth;
   out.teeth_in_cut = now.teeth_cutting;
   out.status = status;
   return status;
@@ -243,9 +241,8 @@ void MillSimulator::reset() noexcept {
   s.position_mm = s.options.initial_tool_position_mm;
   s.spindle_angle_rad = 0;
   s.samples = 0;
-  s.op_rpm = s.op_feed = s.op_depth = kNaN;
-  s.rot_rpm = kNaN;
-  s.delay_rpm = kNaN;
+  s.in_feedrate = s.in_rpm = s.in_depth = kNaN;
+  s.dtheta = kNaN;
   s.dir_c = 1;
   s.dir_s = 0;
   s.calls_since_sync = 0;

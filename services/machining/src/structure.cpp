@@ -60,61 +60,91 @@ StructureModel::StructureModel(const Structure& structure, double step_s) : step
   nx_ = modes_.size();
   add(structure.tool_y, Body::tool, Axis::y);
   add(structure.part_y, Body::part, Axis::y);
-  for (const DiscreteMode& m : modes_) {
-    p11_.push_back(m.p11);
-    p12_.push_back(m.p12);
-    p21_.push_back(m.p21);
-    p22_.push_back(m.p22);
-    g1s_.push_back(m.sign * m.g1);
-    g2s_.push_back(m.sign * m.g2);
-    h11s_.push_back(m.sign * m.h11);
-    h12s_.push_back(m.sign * m.h12);
-    w_.push_back(m.sign);
-    (m.axis == Axis::x ? half_gain_x_ : half_gain_y_) += m.hg1;
+  for (std::size_t i = 0; i < modes_.size(); ++i) {
+    const DiscreteMode& m = modes_[i];
+    const double g1s = m.sign * m.g1, g2s = m.sign * m.g2;
+    const double h11s = m.sign * m.h11, h12s = m.sign * m.h12;
+    Coefficients c{};
+    c.col_q = Pair{m.p11, m.p21};
+    c.col_v = Pair{m.p12, m.p22};
+    c.col_f = Pair{g1s, g2s};
+    c.pred = Pair{h11s * m.p11 + h12s * m.p21, h11s * m.p12 + h12s * m.p22};
+    c.half = Pair{h11s, h12s};
+    coef_.push_back(c);
+    slot_.push_back(static_cast<std::uint8_t>((m.body == Body::tool ? 0 : 2) + (m.axis == Axis::x ? 0 : 1)));
+    const bool x = i < nx_;
+    (x ? half_gain_x_ : half_gain_y_) += m.hg1;
+    (x ? mid_gain_x_ : mid_gain_y_) += h11s * g1s + h12s * g2s;
   }
-  q_.assign(modes_.size(), 0.0);
-  v_.assign(modes_.size(), 0.0);
+  mid_gain_x_ += half_gain_x_;
+  mid_gain_y_ += half_gain_y_;
+  z_.assign(modes_.size(), Pair{0, 0});
+}
+
+void StructureModel::predict_from_state(double fx_tool_n, double fy_tool_n, double& rel_x_mm,
+                                        double& rel_y_mm) const noexcept {
+  double rx = half_gain_x_ * fx_tool_n, ry = half_gain_y_ * fy_tool_n;
+  for (std::size_t i = 0; i < coef_.size(); ++i) {
+    const Pair p = coef_[i].half * z_[i];
+    const double d = p[0] + p[1];
+    if (i < nx_) {
+      rx += d;
+    } else {
+      ry += d;
+    }
+  }
+  rel_x_mm = rx;
+  rel_y_mm = ry;
 }
 
 Displacements StructureModel::displacements() const noexcept {
+  double sum[4] = {0, 0, 0, 0};  // tool x, tool y, part x, part y
+  const std::uint8_t* slot = slot_.data();
+  for (std::size_t i = 0; i < z_.size(); ++i) sum[slot[i]] += z_[i][0];
   Displacements d;
-  for (std::size_t i = 0; i < modes_.size(); ++i) {
-    const DiscreteMode& m = modes_[i];
-    double& target = m.body == Body::tool ? (m.axis == Axis::x ? d.tool_x_mm : d.tool_y_mm)
-                                          : (m.axis == Axis::x ? d.part_x_mm : d.part_y_mm);
-    target += q_[i];
-  }
+  d.tool_x_mm = sum[0];
+  d.tool_y_mm = sum[1];
+  d.part_x_mm = sum[2];
+  d.part_y_mm = sum[3];
   return d;
 }
 
 void StructureModel::relative(double& rel_x_mm, double& rel_y_mm) const noexcept {
   double rx = 0, ry = 0;
-  for (std::size_t i = 0; i < nx_; ++i) rx += w_[i] * q_[i];
-  for (std::size_t i = nx_; i < modes_.size(); ++i) ry += w_[i] * q_[i];
+  for (std::size_t i = 0; i < modes_.size(); ++i) {
+    const double d = modes_[i].sign * z_[i][0];
+    if (i < nx_) {
+      rx += d;
+    } else {
+      ry += d;
+    }
+  }
   rel_x_mm = rx;
   rel_y_mm = ry;
 }
 
 void StructureModel::reset() noexcept {
-  for (std::size_t i = 0; i < modes_.size(); ++i) {
-    q_[i] = 0;
-    v_[i] = 0;
-  }
+  for (Pair& x : z_) x = Pair{0, 0};
+  mid_valid_ = false;
 }
 
 void StructureModel::flush_tiny() noexcept {
   constexpr double kTiny = 1e-150;
-  for (std::size_t i = 0; i < modes_.size(); ++i) {
-    if (std::abs(q_[i]) < kTiny) q_[i] = 0;
-    if (std::abs(v_[i]) < kTiny) v_[i] = 0;
+  for (Pair& p : z_) {
+    for (int j = 0; j < 2; ++j) {
+      if (p[j] != 0 && std::abs(p[j]) < kTiny) {
+        p[j] = 0;
+        mid_valid_ = false;
+      }
+    }
   }
 }
 
 bool StructureModel::finite() const noexcept {
   // One test for all: a NaN or infinity anywhere makes the sum non-finite.
-  double sum = 0;
-  for (std::size_t i = 0; i < modes_.size(); ++i) sum += q_[i] + v_[i];
-  return std::isfinite(sum);
+  Pair sum{0, 0};
+  for (const Pair& p : z_) sum += p;
+  return std::isfinite(sum[0] + sum[1]);
 }
 
 }  // namespace smc::machining

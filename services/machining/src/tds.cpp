@@ -10,6 +10,7 @@
 
 #include "engine.hpp"
 #include "format.hpp"
+#include "multiversion.hpp"
 
 namespace smc::machining {
 
@@ -201,8 +202,20 @@ StabilityReport judge_on_orbit(const std::vector<double>& norms, const Eigen::Ma
 
 }  // namespace
 
+namespace {
+SMC_MULTIVERSION BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
+                                       const BatchOptions& options);
+}  // namespace
+
 BatchResult simulate(const MillingModel& model, const CutConditions& cut,
                      const BatchOptions& options) {
+  return run_batch(model, cut, options);
+}
+
+namespace {
+
+BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
+                      const BatchOptions& options) {
   validate(model);
   validate(cut);
   if (!(std::isfinite(options.duration_s) && options.duration_s > 0)) {
@@ -242,17 +255,12 @@ BatchResult simulate(const MillingModel& model, const CutConditions& cut,
     table_cos[static_cast<std::size_t>(j)] = std::cos(a);
     table_sin[static_cast<std::size_t>(j)] = std::sin(a);
   }
-  std::vector<double> tc(static_cast<std::size_t>(n_teeth)), ts(tc.size());
-  std::vector<double> now_c(tc.size()), now_s(tc.size());
-  // Tooth angles of step `phase` (in [0, per_rev)) into tc, ts.
+  // Tooth 0's direction at the middle of step `phase` (in [0, per_rev)); the
+  // engine turns it to the other teeth.
+  double tc = 1, ts = 0;
   const auto angles = [&](std::int64_t phase) {
-    for (int i = 0; i < n_teeth; ++i) {
-      std::int64_t j = phase + static_cast<std::int64_t>(sense) * i * m;
-      if (j < 0) j += per_rev;
-      if (j >= per_rev) j -= per_rev;
-      tc[static_cast<std::size_t>(i)] = table_cos[static_cast<std::size_t>(j)];
-      ts[static_cast<std::size_t>(i)] = table_sin[static_cast<std::size_t>(j)];
-    }
+    tc = table_cos[static_cast<std::size_t>(phase)];
+    ts = table_sin[static_cast<std::size_t>(phase)];
   };
 
   const double feedrate = cut.feed_per_tooth_mm * n_teeth * cut.spindle_rpm / 60.0;
@@ -275,7 +283,7 @@ BatchResult simulate(const MillingModel& model, const CutConditions& cut,
     for (int k = 0; k < m; ++k) {
       angles((start_phase + k) % per_rev);
       const detail::StepForces f =
-          engine.tooth_forces(tc.data(), ts.data(), n_teeth, 0.0, false, 0.0, 0.0, half_sweep);
+          engine.tooth_forces(tc, ts, 0.0, false, 0.0, 0.0, half_sweep);
       fx[static_cast<std::size_t>(k)] = f.fx_n;
       fy[static_cast<std::size_t>(k)] = f.fy_n;
     }
@@ -288,7 +296,7 @@ BatchResult simulate(const MillingModel& model, const CutConditions& cut,
     engine.set_previous_force(fx[last], fy[last]);
     for (int k = 0; k < su.delay_steps; ++k) {
       angles((start_phase + k) % per_rev);
-      engine.step(tc.data(), ts.data(), n_teeth, 0.0, false, delay_steps, half_sweep, false);
+      engine.step(tc, ts, 0.0, false, delay_steps, half_sweep, false);
     }
     for (std::size_t i = 0; i < modes; ++i) {
       orbit_q[i] = st.q(i);  // back on the orbit (up to rounding)
@@ -358,8 +366,8 @@ BatchResult simulate(const MillingModel& model, const CutConditions& cut,
   for (std::int64_t k = 0; k < steps; ++k) {
     angles(phase);
     if (++phase == per_rev) phase = 0;
-    const detail::StepForces f = engine.step(tc.data(), ts.data(), n_teeth, position + dx / 2,
-                                             check_length, delay_steps, half_sweep);
+    const detail::StepForces f =
+        engine.step(tc, ts, position + dx / 2, check_length, delay_steps, half_sweep);
     position += dx;
     power_total += f.tangential_sum_n * v_m_s;
     out.max_abs_fy_n = std::max(out.max_abs_fy_n, std::abs(f.fy_n));
@@ -368,14 +376,9 @@ BatchResult simulate(const MillingModel& model, const CutConditions& cut,
     const std::int64_t done = k + 1;
     if (record_every > 0 && --record_countdown == 0) {
       record_countdown = record_every;
-      // Tooth angles at the end of this step.
+      // Tooth 0's angle at the end of this step.
       const double a0 = sense * kTwoPi * static_cast<double>(done % per_rev) / per_rev;
-      for (int i = 0; i < n_teeth; ++i) {
-        const double a = a0 + kTwoPi * i / n_teeth;
-        now_c[static_cast<std::size_t>(i)] = std::cos(a);
-        now_s[static_cast<std::size_t>(i)] = std::sin(a);
-      }
-      const detail::StepForces fn = engine.forces_now(now_c.data(), now_s.data(), n_teeth, position,
+      const detail::StepForces fn = engine.forces_now(std::cos(a0), std::sin(a0), position,
                                                       check_length, delay_steps);
       const Displacements d = st.displacements();
       out.time_s.push_back(static_cast<double>(done) * h);
@@ -433,6 +436,8 @@ BatchResult simulate(const MillingModel& model, const CutConditions& cut,
   }
   return out;
 }
+
+}  // namespace
 
 StabilityReport assess_stability(const MillingModel& model, const CutConditions& cut,
                                  int tooth_periods, double max_internal_step_s) {

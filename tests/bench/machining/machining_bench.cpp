@@ -6,6 +6,7 @@
 #include <benchmark/benchmark.h>
 
 #include <numbers>
+#include <vector>
 
 #include "smc/machining/lobes.hpp"
 #include "smc/machining/paper_case.hpp"
@@ -54,6 +55,27 @@ void BM_SimulatorInternalStepCalls_PaperCase(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_SimulatorInternalStepCalls_PaperCase)->Unit(benchmark::kMillisecond);
+
+// As the edge's simulated mill calls it: one call per 0.5 ms sample, the
+// force of each of its 50 internal steps written out for the sensor filters.
+void BM_SimulatorTraced_PaperCase(benchmark::State& state) {
+  mc::MillingModel m = mc::paper_case();
+  m.workpiece.length_mm = 1e6;
+  mc::SimulatorOptions o;
+  o.forces_at_sample_instant = false;
+  mc::MillSimulator sim(m, o);
+  std::vector<double> fx(static_cast<std::size_t>(sim.steps_per_sample()));
+  std::vector<double> fy(fx.size()), fz(fx.size());
+  const mc::StepForceTrace trace{fx.data(), fy.data(), fz.data()};
+  mc::Sample s;
+  for (auto _ : state) {
+    for (int k = 0; k < 2000; ++k) sim.step({10, 1500, 1.0}, s, trace);
+    benchmark::DoNotOptimize(fy.data());
+  }
+  state.counters["sim_s_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_SimulatorTraced_PaperCase)->Unit(benchmark::kMillisecond);
 
 // One simulated second of a batch run (steady cut, no records).
 void BM_Batch_PaperCase(benchmark::State& state) {

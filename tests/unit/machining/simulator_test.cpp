@@ -142,6 +142,70 @@ TEST(Simulator, StepNeverAllocates) {
   EXPECT_EQ(guard.violations(), 0u);
 }
 
+TEST(Simulator, TraceHoldsEveryInternalStepsForce) {
+  // One call per sample with a trace against one call per internal step: the
+  // same cut, the same forces step by step (up to the rounding of the spindle
+  // angle's recurrence, which the two advance in different chunks), and the
+  // trace's last value is the sample's force.
+  mc::MillingModel m = mc::paper_case();
+  mc::SimulatorOptions per_sample;
+  per_sample.forces_at_sample_instant = false;
+  per_sample.initial_tool_position_mm = -20;
+  mc::SimulatorOptions per_step = per_sample;
+  per_step.sample_period_s = 1e-5;
+  mc::MillSimulator a(m, per_sample), b(m, per_step);
+  ASSERT_EQ(a.steps_per_sample(), 50);
+  std::vector<double> fx(50, std::nan("")), fy(50, std::nan("")), fz(50, std::nan(""));
+  const mc::StepForceTrace trace{fx.data(), fy.data(), fz.data()};
+  mc::Sample sa, sb;
+  double worst = 0, largest = 0;
+  for (int k = 0; k < 400; ++k) {  // 0.2 s: entry into the part, then a steady cut
+    const mc::SampleInput in{10, 1500, k < 200 ? 1.0 : 1.2};
+    ASSERT_EQ(a.step(in, sa, trace), 0u);
+    for (std::size_t i = 0; i < 50; ++i) {
+      ASSERT_EQ(b.step(in, sb), 0u);
+      worst = std::max({worst, std::abs(fx[i] - sb.fx_n), std::abs(fy[i] - sb.fy_n),
+                        std::abs(fz[i] - sb.fz_n)});
+      largest = std::max(largest, std::abs(sb.fy_n));
+    }
+    EXPECT_EQ(fx[49], sa.fx_n);
+    EXPECT_EQ(fy[49], sa.fy_n);
+    EXPECT_EQ(fz[49], sa.fz_n);
+  }
+  EXPECT_GT(largest, 100);  // it did cut
+  EXPECT_LT(worst, 1e-6 * largest);
+}
+
+TEST(Simulator, TracedStepNeverAllocatesAndNeverPassesOnANonFiniteForce) {
+  mc::SimulatorOptions o;
+  o.initial_tool_position_mm = 10;
+  mc::MillSimulator sim(mc::paper_case(), o);
+  std::vector<double> fx(50), fy(50), fz(50);
+  const mc::StepForceTrace trace{fx.data(), fy.data(), fz.data()};
+  mc::Sample s;
+  {
+    smc::test::ForbidAllocations guard;
+    for (int k = 0; k < 200; ++k) sim.step({10, 1500, 1.0}, s, trace);
+    EXPECT_EQ(guard.violations(), 0u);
+  }
+  EXPECT_GT(std::abs(fy[10]), 100);
+  // A linear law at an absurd depth makes the force overflow: the state is
+  // reset, the status says so, and the trace holds zeros, never an infinity
+  // or a NaN.
+  mc::MillingModel lin = mc::paper_case();
+  lin.law = mc::LinearLaw{600, 200, 50};
+  mc::MillSimulator hot(lin, o);
+  bool blew_up = false;
+  for (int k = 0; k < 100 && !blew_up; ++k) {
+    blew_up = (hot.step({10, 1500, 1e306}, s, trace) & mc::StepStatus::kNotFinite) != 0;
+    for (std::size_t i = 0; i < 50; ++i) {
+      ASSERT_TRUE(std::isfinite(fx[i]) && std::isfinite(fy[i]) && std::isfinite(fz[i]));
+    }
+  }
+  ASSERT_TRUE(blew_up);
+  for (std::size_t i = 0; i < 50; ++i) EXPECT_EQ(fy[i], 0.0);
+}
+
 TEST(Simulator, AgreesWithTheBatchRunAtConstantConditions) {
   // Same internal step (1e-5 s divides both the sample and the tooth period),
   // same angles: the stepping simulator inside the part and a steady batch run

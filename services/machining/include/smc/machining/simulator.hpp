@@ -18,6 +18,9 @@
 //     buffer sized at construction for the lowest spindle speed,
 //   - the structure's modes stepped exactly (structure.hpp).
 //
+// A caller that filters the force itself passes a StepForceTrace and gets
+// the force of every internal step as well.
+//
 // Real-time contract: the constructor allocates and may throw; step(),
 // set_tool_position(), reset() and the accessors never allocate, lock or
 // throw. Results are deterministic: the same calls give the same samples.
@@ -43,8 +46,7 @@ struct SimulatorOptions {
   // true: Sample's forces and power are the values at the sample instant.
   // false: those of the last internal step (the force held over it,
   // evaluated at its middle), which saves one force evaluation per call:
-  // for callers that step one internal step per call and filter the force
-  // themselves.
+  // for callers that filter the force themselves (see StepForceTrace).
   bool forces_at_sample_instant = true;
 };
 
@@ -88,6 +90,18 @@ struct Sample {
   std::uint32_t status = 0;
 };
 
+// Where step() puts the force of each internal step of the sample (the force
+// held over the step, evaluated at its middle): arrays of steps_per_sample()
+// values each, owned by the caller. For callers that filter the force
+// themselves, e.g. a sensor's anti-aliasing filter running at the internal
+// step: one call per sample then does what one call per internal step did,
+// without paying the per-call work at every step.
+struct StepForceTrace {
+  double* fx_n = nullptr;
+  double* fy_n = nullptr;
+  double* fz_n = nullptr;
+};
+
 class MillSimulator {
  public:
   // Validates the model and options (throws ModelError / std::invalid_argument)
@@ -101,6 +115,9 @@ class MillSimulator {
 
   // Real-time safe. Advances one sample period; returns out.status.
   std::uint32_t step(const SampleInput& input, Sample& out) noexcept;
+  // The same, and writes the force of every internal step into trace (each
+  // array must hold steps_per_sample() values).
+  std::uint32_t step(const SampleInput& input, Sample& out, const StepForceTrace& trace) noexcept;
 
   // Real-time safe. Moves the cutter axis to x (mm) along the feed, e.g. at
   // the start of a pass (x = -radius - approach puts the cutter in air
