@@ -55,7 +55,8 @@ struct SimulatedMill::Impl {
   machining::MillingModel model;
   machining::MillSimulator sim;
   smc::config::SimulatedMill options;
-  int substeps = 1;
+  // The force of each internal step of the last sample, for the filters.
+  std::vector<double> trace_x, trace_y, trace_z;
   LowPass lp_x, lp_y, lp_z;
   std::mt19937_64 rng;
   std::normal_distribution<double> noise{0.0, 1.0};
@@ -80,15 +81,17 @@ struct SimulatedMill::Impl {
   static machining::SimulatorOptions sim_options(const machining::MillingModel& m,
                                                  const smc::config::SimulatedMill& o,
                                                  double period_s) {
-    // Step the simulator at its internal step so the sensor filters see the
-    // continuous force; the mill samples every `period_s`.
+    // One call per sample, a whole number of internal steps (no coarser than
+    // the model's) per call; the sensor filters run over the force of every
+    // internal step (StepForceTrace), so they see the continuous force.
     const double h = m.internal_step_s;
-    const double n = std::max(1.0, std::round(period_s / h));
+    const double n = std::max(1.0, std::ceil(period_s / h - 1e-9));
     machining::SimulatorOptions so;
-    so.sample_period_s = period_s / n;
+    so.sample_period_s = period_s;
+    so.max_internal_step_s = period_s / n;
     so.min_spindle_rpm = o.min_spindle_rpm() > 0 ? o.min_spindle_rpm() : 100;
-    // One internal step per call: the force of the step just taken is what
-    // the filters need, not one more evaluation at the sample instant.
+    // The filters take the force of each internal step, not one more
+    // evaluation at the sample instant.
     so.forces_at_sample_instant = false;
     return so;
   }
@@ -135,8 +138,11 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
   if (sim.noise_rms_n() < 0) throw ConfigError("simulation.noise_rms_n: must be >= 0");
   impl_ = std::make_unique<Impl>(std::move(m), sim, sample_period_s);
   Impl& s = *impl_;
-  s.substeps = static_cast<int>(std::lround(sample_period_s / s.sim.sample_period_s()));
-  const double rate = 1.0 / s.sim.sample_period_s();
+  const auto steps = static_cast<std::size_t>(s.sim.steps_per_sample());
+  s.trace_x.assign(steps, 0.0);
+  s.trace_y.assign(steps, 0.0);
+  s.trace_z.assign(steps, 0.0);
+  const double rate = 1.0 / s.sim.internal_step_s();
   // A cut-off of 0 (or above Nyquist) means no filter on that channel.
   auto cfg = [&](LowPass& lp, double hz) { lp.configure(hz > 0 && hz < rate / 2 ? hz : rate * 0.45, rate); };
   cfg(s.lp_x, sim.f_y_cutoff_hz());
@@ -203,11 +209,11 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   machining::Sample smp;
   uint32_t status = 0;
   double fx = 0, fy = 0, fz = 0;
-  for (int k = 0; k < s.substeps; ++k) {
-    status |= s.sim.step(in, smp);
-    fx = s.lp_x(smp.fx_n);
-    fy = s.lp_y(smp.fy_n);
-    fz = s.lp_z(smp.fz_n);
+  status |= s.sim.step(in, smp, {s.trace_x.data(), s.trace_y.data(), s.trace_z.data()});
+  for (std::size_t k = 0; k < s.trace_x.size(); ++k) {
+    fx = s.lp_x(s.trace_x[k]);
+    fy = s.lp_y(s.trace_y[k]);
+    fz = s.lp_z(s.trace_z[k]);
   }
   s.time_s += period_s_;
   const double sigma = s.options.noise_rms_n();
