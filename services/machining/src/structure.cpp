@@ -83,18 +83,12 @@ StructureModel::StructureModel(const Structure& structure, double step_s) : step
 
 void StructureModel::predict_from_state(double fx_tool_n, double fy_tool_n, double& rel_x_mm,
                                         double& rel_y_mm) const noexcept {
-  double rx = half_gain_x_ * fx_tool_n, ry = half_gain_y_ * fy_tool_n;
-  for (std::size_t i = 0; i < coef_.size(); ++i) {
+  rel_x_mm = half_gain_x_ * fx_tool_n;
+  rel_y_mm = half_gain_y_ * fy_tool_n;
+  add_by_axis(rel_x_mm, rel_y_mm, [this](std::size_t i) {
     const Pair p = coef_[i].half * z_[i];
-    const double d = p[0] + p[1];
-    if (i < nx_) {
-      rx += d;
-    } else {
-      ry += d;
-    }
-  }
-  rel_x_mm = rx;
-  rel_y_mm = ry;
+    return p[0] + p[1];
+  });
 }
 
 Displacements StructureModel::displacements() const noexcept {
@@ -110,17 +104,8 @@ Displacements StructureModel::displacements() const noexcept {
 }
 
 void StructureModel::relative(double& rel_x_mm, double& rel_y_mm) const noexcept {
-  double rx = 0, ry = 0;
-  for (std::size_t i = 0; i < modes_.size(); ++i) {
-    const double d = modes_[i].sign * z_[i][0];
-    if (i < nx_) {
-      rx += d;
-    } else {
-      ry += d;
-    }
-  }
-  rel_x_mm = rx;
-  rel_y_mm = ry;
+  rel_x_mm = rel_y_mm = 0;
+  add_by_axis(rel_x_mm, rel_y_mm, [this](std::size_t i) { return modes_[i].sign * z_[i][0]; });
 }
 
 void StructureModel::reset() noexcept {

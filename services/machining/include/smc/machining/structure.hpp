@@ -134,6 +134,12 @@ class StructureModel {
   static void advance(const Coefficients& c, Pair& z, double f, Pair& b) noexcept;
   void predict_from_state(double fx_tool_n, double fy_tool_n, double& rel_x_mm,
                           double& rel_y_mm) const noexcept;
+  // Adds term(i) of every x mode to x and of every y mode to y.
+  template <class Term>
+  void add_by_axis(double& x, double& y, Term term) const noexcept {
+    for (std::size_t i = 0; i < nx_; ++i) x += term(i);
+    for (std::size_t i = nx_; i < modes_.size(); ++i) y += term(i);
+  }
 
   double step_s_;
   std::vector<DiscreteMode> modes_;
