@@ -19,6 +19,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <vector>
 
 #include "fast_pow.hpp"
@@ -55,12 +56,12 @@ class CutEngine {
         sense_d_(sense_),
         law_(model.law),
         pow_(feed_power(model.law, true), feed_power(model.law, false)) {
-    const double lead = model.cutter.lead_angle_deg * 3.14159265358979323846 / 180.0;
+    const double lead = model.cutter.lead_angle_deg * std::numbers::pi / 180.0;
     cos_lead_ = std::cos(lead);
     sin_lead_ = std::sin(lead);
     tan_lead_ = sin_lead_ / cos_lead_;  // lead < 90 degrees (validated)
     for (int i = 0; i < teeth_; ++i) {
-      const double a = 2 * 3.14159265358979323846 * i / teeth_;
+      const double a = 2 * std::numbers::pi * i / teeth_;
       offset_cos_[static_cast<std::size_t>(i)] = std::cos(a);
       offset_sin_[static_cast<std::size_t>(i)] = std::sin(a);
     }
@@ -79,30 +80,28 @@ class CutEngine {
     half_feed_mm_ = 0.5 * feed_per_tooth_mm;
     active_ = spindle_rpm > 0 && depth_mm > 0;
     const double v_m_min = cutting_speed_m_per_min(radius_mm_, spindle_rpm);
+    double ct = 0, cn = 0;  // F_t = ct h^(1 + feed exponent), F_n likewise
     if (const auto* p = std::get_if<PowerLaw>(&law_)) {
       power_law_ = true;
       const double vs = v_m_min / 1000.0;
-      ct_ = active_ ? 1000.0 * p->cutting.coefficient_kn_per_mm2 *
-                          std::pow(depth_mm, 1.0 + p->cutting.depth_exponent) *
-                          std::pow(vs, p->cutting.speed_exponent)
-                    : 0.0;
-      cn_ = active_ ? 1000.0 * p->thrust.coefficient_kn_per_mm2 *
-                          std::pow(depth_mm, 1.0 + p->thrust.depth_exponent) *
-                          std::pow(vs, p->thrust.speed_exponent)
-                    : 0.0;
-      et_ = 1.0 + p->cutting.feed_exponent;
-      en_ = 1.0 + p->thrust.feed_exponent;
+      if (active_) {
+        ct = 1000.0 * p->cutting.coefficient_kn_per_mm2 *
+             std::pow(depth_mm, 1.0 + p->cutting.depth_exponent) *
+             std::pow(vs, p->cutting.speed_exponent);
+        cn = 1000.0 * p->thrust.coefficient_kn_per_mm2 *
+             std::pow(depth_mm, 1.0 + p->thrust.depth_exponent) *
+             std::pow(vs, p->thrust.speed_exponent);
+      }
       ca_ = 0;
     } else {
       const auto& l = std::get<LinearLaw>(law_);
       power_law_ = false;
-      ct_ = l.k_t_n_per_mm2 * depth_mm;
-      cn_ = l.k_n_n_per_mm2 * depth_mm;
+      ct = l.k_t_n_per_mm2 * depth_mm;
+      cn = l.k_n_n_per_mm2 * depth_mm;
       ca_ = l.k_a_n_per_mm2 * depth_mm;
-      et_ = en_ = 1.0;
     }
-    st_coef_ = sense_d_ * ct_;
-    fr_coef_ = cos_lead_ * cn_;
+    st_coef_ = sense_d_ * ct;
+    fr_coef_ = cos_lead_ * cn;
   }
 
   // Forces of the teeth for displacement change (dux, duy) since one delay
@@ -280,7 +279,7 @@ class CutEngine {
   bool active_ = false;
   bool power_law_ = true;
   double feed_mm_ = 0, half_feed_mm_ = 0;
-  double ct_ = 0, cn_ = 0, ca_ = 0, et_ = 1, en_ = 1;
+  double ca_ = 0;                     // linear law: F_a = ca h
   double st_coef_ = 0, fr_coef_ = 0;  // sense ct, cos(lead) cn
 };
 
