@@ -8,6 +8,7 @@
 #include "grafcet_view.hpp"
 #include "json.hpp"
 #include "smc/documents/load.hpp"
+#include "smc/wire/names.hpp"
 #include "smc/wire/topics.hpp"
 #include "smc_config.pb.h"
 
@@ -30,40 +31,6 @@ void write_id(JsonWriter& w, std::string_view key, std::uint64_t v) {
     w.value(v);
   } else {
     w.value(std::to_string(v));
-  }
-}
-
-const char* edge_state_name(int s) {
-  switch (s) {
-    case smc_data_EDGE_IDLE:
-      return "EDGE_IDLE";
-    case smc_data_EDGE_CONFIGURED:
-      return "EDGE_CONFIGURED";
-    case smc_data_EDGE_RUNNING:
-      return "EDGE_RUNNING";
-    case smc_data_EDGE_FEED_HOLD:
-      return "EDGE_FEED_HOLD";
-    case smc_data_EDGE_FAULT:
-      return "EDGE_FAULT";
-    default:
-      return "EDGE_UNKNOWN";
-  }
-}
-
-const char* job_phase_name(int p) {
-  switch (p) {
-    case smc_data_JOB_ASSIGNED:
-      return "JOB_ASSIGNED";
-    case smc_data_JOB_RUNNING:
-      return "JOB_RUNNING";
-    case smc_data_JOB_DONE:
-      return "JOB_DONE";
-    case smc_data_JOB_FAILED:
-      return "JOB_FAILED";
-    case smc_data_JOB_INTERRUPTED:
-      return "JOB_INTERRUPTED";
-    default:
-      return "JOB_UNKNOWN";
   }
 }
 
@@ -238,7 +205,7 @@ struct CellState::Impl {
         .field("machine_id", m.id)
         .field("online", true)
         .field("t", seconds(s->machine_time_ns))
-        .field("state", edge_state_name(static_cast<int>(s->state)))
+        .field("state", wire::edge_state_name(static_cast<int>(s->state)))
         .field("config_id", get_string(s->config_id))
         .field("job_id", get_string(s->job_id))
         .field("loop_overruns", s->loop_overruns)
@@ -477,7 +444,7 @@ std::vector<Event> CellState::on_progress(const smc_data_JobProgress& p) {
       .field("job_id", job_id)
       .field("t", seconds(p.machine_time_ns))
       .field("sequence_number", p.sequence_number)
-      .field("phase", job_phase_name(static_cast<int>(p.phase)))
+      .field("phase", wire::job_phase_name(static_cast<int>(p.phase)))
       .field("pass_index", p.pass_index)
       .field("pass_count", p.pass_count)
       .field("depth_removed_mm", p.depth_removed_mm)

@@ -23,6 +23,7 @@
 #include "smc/transport/document.hpp"
 #include "smc/transport/endpoint.hpp"
 #include "smc/transport/participant.hpp"
+#include "smc/wire/names.hpp"
 #include "smc/wire/topics.hpp"
 #include "smc_config.pb.h"
 
@@ -684,18 +685,6 @@ class FakeMill {
   smc_data_EdgeState last_state_ = smc_data_EDGE_FAULT;
 };
 
-const char* action_name(smc_data_OperatorAction a) {
-  switch (a) {
-    case smc_data_OP_FEED_HOLD_ON:
-      return "OP_FEED_HOLD_ON";
-    case smc_data_OP_FEED_HOLD_OFF:
-      return "OP_FEED_HOLD_OFF";
-    case smc_data_OP_CHATTER_SIGNAL:
-      return "OP_CHATTER_SIGNAL";
-  }
-  return "?";
-}
-
 }  // namespace
 
 int run_fake_cell(const FakeCellOptions& options, const std::atomic<bool>& stop) {
@@ -728,7 +717,7 @@ int run_fake_cell(const FakeCellOptions& options, const std::atomic<bool>& stop)
       for (auto& m : mills) {
         if (m->id() != mill) continue;
         m->command(c.action);
-        std::printf("command %s %s %s %llu\n", mill.c_str(), action_name(c.action),
+        std::printf("command %s %s %s %llu\n", mill.c_str(), smc::wire::operator_action_name(c.action),
                     wire::get_string(c.operator_name).c_str(),
                     static_cast<unsigned long long>(c.command_id));
         std::fflush(stdout);

@@ -18,40 +18,13 @@
 
 #include "smc/transport/endpoint.hpp"
 #include "smc/transport/participant.hpp"
+#include "smc/wire/names.hpp"
 #include "smc/wire/topics.hpp"
 
 namespace {
 
 std::atomic<bool> g_stop{false};
 extern "C" void on_signal(int) { g_stop.store(true); }
-
-const char* action_name(smc_data_OperatorAction a) {
-  switch (a) {
-    case smc_data_OP_FEED_HOLD_ON:
-      return "OP_FEED_HOLD_ON";
-    case smc_data_OP_FEED_HOLD_OFF:
-      return "OP_FEED_HOLD_OFF";
-    case smc_data_OP_CHATTER_SIGNAL:
-      return "OP_CHATTER_SIGNAL";
-  }
-  return "?";
-}
-
-const char* state_name(smc_data_EdgeState s) {
-  switch (s) {
-    case smc_data_EDGE_IDLE:
-      return "EDGE_IDLE";
-    case smc_data_EDGE_CONFIGURED:
-      return "EDGE_CONFIGURED";
-    case smc_data_EDGE_RUNNING:
-      return "EDGE_RUNNING";
-    case smc_data_EDGE_FEED_HOLD:
-      return "EDGE_FEED_HOLD";
-    case smc_data_EDGE_FAULT:
-      return "EDGE_FAULT";
-  }
-  return "?";
-}
 
 }  // namespace
 
@@ -93,7 +66,7 @@ int main(int argc, char** argv) {
     commands.take([&](const smc_data_OperatorCommand& c, const tr::SampleInfo& i) {
       const std::string id = get_string(c.machine_id);
       if (!i.valid_data || !wanted(id)) return;
-      std::printf("command %s %s %s %llu\n", id.c_str(), action_name(c.action),
+      std::printf("command %s %s %s %llu\n", id.c_str(), smc::wire::operator_action_name(c.action),
                   get_string(c.operator_name).c_str(),
                   static_cast<unsigned long long>(c.command_id));
     });
@@ -118,7 +91,7 @@ int main(int argc, char** argv) {
       auto it = last_state.find(id);
       if (it != last_state.end() && it->second == st) return;
       last_state[id] = st;
-      std::printf("status %s %s\n", id.c_str(), state_name(s.state));
+      std::printf("status %s %s\n", id.c_str(), smc::wire::edge_state_name(s.state));
     });
   }
   return 0;

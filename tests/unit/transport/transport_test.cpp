@@ -18,6 +18,7 @@
 #include "smc/transport/endpoint.hpp"
 #include "smc/transport/error.hpp"
 #include "smc/transport/participant.hpp"
+#include "smc/wire/names.hpp"
 #include "smc/wire/topics.hpp"
 #include "smc_config.pb.h"
 
@@ -259,6 +260,17 @@ SMC_ROUND_TRIP_TEST(smc_data_SupervisorSituation)
 SMC_ROUND_TRIP_TEST(smc_data_EdgeStatus)
 SMC_ROUND_TRIP_TEST(smc_data_JobProgress)
 SMC_ROUND_TRIP_TEST(smc_data_OperatorCommand)
+
+TEST(WireNames, EnumsAreNamedAsTheIdlSpellsThemAndStrayValuesAsUnknown) {
+  using namespace smc::wire;
+  EXPECT_STREQ(edge_state_name(smc_data_EDGE_FEED_HOLD), "EDGE_FEED_HOLD");
+  EXPECT_STREQ(edge_state_name(smc_data_EDGE_FAULT), "EDGE_FAULT");
+  EXPECT_STREQ(job_phase_name(smc_data_JOB_INTERRUPTED), "JOB_INTERRUPTED");
+  EXPECT_STREQ(operator_action_name(smc_data_OP_CHATTER_SIGNAL), "OP_CHATTER_SIGNAL");
+  EXPECT_STREQ(edge_state_name(99), "EDGE_UNKNOWN");
+  EXPECT_STREQ(job_phase_name(-1), "JOB_UNKNOWN");
+  EXPECT_STREQ(operator_action_name(7), "OP_UNKNOWN");
+}
 
 TEST_F(RoundTrip, EnvelopeCarriesProtobufDocument) {
   smc::config::SupervisorConfig cfg;
