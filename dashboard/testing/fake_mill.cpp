@@ -717,7 +717,8 @@ int run_fake_cell(const FakeCellOptions& options, const std::atomic<bool>& stop)
       for (auto& m : mills) {
         if (m->id() != mill) continue;
         m->command(c.action);
-        std::printf("command %s %s %s %llu\n", mill.c_str(), smc::wire::operator_action_name(c.action),
+        std::printf("command %s %s %s %llu\n", mill.c_str(),
+                    smc::wire::operator_action_name(c.action),
                     wire::get_string(c.operator_name).c_str(),
                     static_cast<unsigned long long>(c.command_id));
         std::fflush(stdout);

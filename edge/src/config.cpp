@@ -60,13 +60,13 @@ EdgeConfig edge_config_from_proto(const smc::config::SupervisorConfig& cfg) {
       fail(at + "depth_mm", "must be in (0, 50) mm (got " + num(ps.depth_mm()) + ")");
     }
     if (!(ps.spindle_rpm() > 0 && ps.spindle_rpm() <= p.max_spindle_rpm)) {
-      fail(at + "spindle_rpm", "must be in (0, " + num(p.max_spindle_rpm) + "] (got " +
-                                   num(ps.spindle_rpm()) + ")");
+      fail(at + "spindle_rpm",
+           "must be in (0, " + num(p.max_spindle_rpm) + "] (got " + num(ps.spindle_rpm()) + ")");
     }
     if (!(ps.feedrate_mm_s() > 0 && ps.feedrate_mm_s() <= p.max_feedrate_mm_s)) {
       fail(at + "feedrate_mm_s", "must be in (0, " + num(p.max_feedrate_mm_s) +
-                                     "] mm/s, the machine's limit (got " +
-                                     num(ps.feedrate_mm_s()) + ")");
+                                     "] mm/s, the machine's limit (got " + num(ps.feedrate_mm_s()) +
+                                     ")");
     }
     const double fpt = p.feed_per_tooth_for(ps.feedrate_mm_s(), ps.spindle_rpm());
     if (fpt > p.max_feed_per_tooth_mm) {

@@ -67,7 +67,8 @@ EdgeCore::EdgeCore(EdgeConfig config, Drive& drive)
   for (int i = 0; i < kModuleCount; ++i) {
     const auto id = static_cast<ModuleId>(i);
     modules_[static_cast<size_t>(i)] = make_module(id);
-    if ((config_.modules & bit(id)) != 0) modules_[static_cast<size_t>(i)]->configure(config_.params);
+    if ((config_.modules & bit(id)) != 0)
+      modules_[static_cast<size_t>(i)]->configure(config_.params);
   }
   suppressor_ = static_cast<ChatterSuppressor*>(modules_[static_cast<size_t>(ModuleId::F)].get());
   suppressor_->bind(&program_, &current_pass_);
@@ -182,8 +183,7 @@ void EdgeCore::tick(bool overrun) noexcept {
   } else if (std::fabs(f.f_y_n) >= p.force_sensor_range_n ||
              std::fabs(f.f_z_n) >= p.force_sensor_range_n) {
     sample_ok = false;
-    raise_fault(Fault::kSaturatedForce, -1,
-                std::max(std::fabs(f.f_y_n), std::fabs(f.f_z_n)));
+    raise_fault(Fault::kSaturatedForce, -1, std::max(std::fabs(f.f_y_n), std::fabs(f.f_z_n)));
   }
   if (overrun) raise_fault(Fault::kOverrun, -1, 0);
   if (sample_ok) {

@@ -35,7 +35,8 @@ std::string steps_string(const EdgeCore& core, uint64_t steps) {
 
 class CsvFile {
  public:
-  explicit CsvFile(const std::filesystem::path& p) : path_(p.string()), f_(std::fopen(path_.c_str(), "w")) {
+  explicit CsvFile(const std::filesystem::path& p)
+      : path_(p.string()), f_(std::fopen(path_.c_str(), "w")) {
     if (f_ == nullptr) throw std::runtime_error(path_ + ": cannot write");
   }
   ~CsvFile() {
@@ -79,13 +80,13 @@ void write_outputs(const std::string& dir, const EdgeCore& core, const RunResult
                  "feedrate_mm_s,feed_per_tooth_mm,power_peak_w,chatter_ratio,gain_estimate,"
                  "engagement,contact,chatter,fault_hold,modules,steps\n");
     for (const auto& r : run.revolutions) {
-      std::fprintf(f.get(),
-                   "%.4f,%u,%d,%d,%.3f,%.3f,%.2f,%.2f,%.3f,%.5f,%.1f,%.4f,%.2f,%.3f,%d,%d,%d,%s,%s\n",
-                   r.t_s, r.revolution, r.pass_index, r.pass_count, r.x_mm, r.depth_mm,
-                   r.f_y_peak_n, r.f_ref_n, r.feedrate_mm_s, r.feed_per_tooth_mm, r.power_peak_w,
-                   r.chatter_ratio, r.gain_estimate, r.engagement_min, r.contact ? 1 : 0,
-                   r.chatter ? 1 : 0, r.fault_hold ? 1 : 0, modules_string(r.active).c_str(),
-                   steps_string(core, r.active_steps).c_str());
+      std::fprintf(
+          f.get(),
+          "%.4f,%u,%d,%d,%.3f,%.3f,%.2f,%.2f,%.3f,%.5f,%.1f,%.4f,%.2f,%.3f,%d,%d,%d,%s,%s\n", r.t_s,
+          r.revolution, r.pass_index, r.pass_count, r.x_mm, r.depth_mm, r.f_y_peak_n, r.f_ref_n,
+          r.feedrate_mm_s, r.feed_per_tooth_mm, r.power_peak_w, r.chatter_ratio, r.gain_estimate,
+          r.engagement_min, r.contact ? 1 : 0, r.chatter ? 1 : 0, r.fault_hold ? 1 : 0,
+          modules_string(r.active).c_str(), steps_string(core, r.active_steps).c_str());
     }
   }
   {
@@ -101,8 +102,8 @@ void write_outputs(const std::string& dir, const EdgeCore& core, const RunResult
         std::snprintf(buf, sizeof buf, "ratio %.3f at %.0f Hz", e.ratio, e.frequency_hz);
         detail = buf;
       }
-      std::fprintf(f.get(), "%.4f,%s,%d,%d,%.3f,%s,%s,%s\n", e.t_s, to_string(e.kind),
-                   e.pass_index, e.pass_count, e.depth_mm, steps_string(core, e.active_steps).c_str(),
+      std::fprintf(f.get(), "%.4f,%s,%d,%d,%.3f,%s,%s,%s\n", e.t_s, to_string(e.kind), e.pass_index,
+                   e.pass_count, e.depth_mm, steps_string(core, e.active_steps).c_str(),
                    modules_string(e.active).c_str(), detail.c_str());
     }
   }

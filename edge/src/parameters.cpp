@@ -19,8 +19,7 @@ double EdgeParameters::feedrate_for(double feed_per_tooth_mm, double spindle_rpm
   return feed_per_tooth_mm * teeth * spindle_rpm / 60.0;
 }
 
-double EdgeParameters::feed_per_tooth_for(double feedrate_mm_s,
-                                          double spindle_rpm) const noexcept {
+double EdgeParameters::feed_per_tooth_for(double feedrate_mm_s, double spindle_rpm) const noexcept {
   const double rev_s = teeth * spindle_rpm / 60.0;
   return rev_s > 0 ? feedrate_mm_s / rev_s : 0.0;
 }
@@ -76,11 +75,11 @@ EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) 
   p.max_feed_per_tooth_mm = o.positive("max_feed_per_tooth_mm", op.max_feed_per_tooth_mm(),
                                        "set the handbook limit, e.g. 0.6");
   p.min_feed_per_tooth_mm =
-      o.in_range("min_feed_per_tooth_mm", op.min_feed_per_tooth_mm(), 1e-6,
-                 p.max_feed_per_tooth_mm, "set the lowest controlled feed, e.g. 0.005");
+      o.in_range("min_feed_per_tooth_mm", op.min_feed_per_tooth_mm(), 1e-6, p.max_feed_per_tooth_mm,
+                 "set the lowest controlled feed, e.g. 0.005");
   p.teeth = static_cast<int>(o.in_range("teeth", op.teeth(), 1, 64, "set the cutter's teeth"));
-  p.cutter_radius_mm = o.positive("cutter_radius_mm", op.cutter_radius_mm(),
-                                  "set the cutter radius, e.g. 25");
+  p.cutter_radius_mm =
+      o.positive("cutter_radius_mm", op.cutter_radius_mm(), "set the cutter radius, e.g. 25");
   p.sample_period_s = o.in_range("sample_period_s", op.sample_period_s(), 1e-5, 0.01,
                                  "set the force sampling period, e.g. 0.0005");
   p.fast_period_s = o.in_range("fast_period_s", op.fast_period_s(), p.sample_period_s, 1.0,
@@ -91,18 +90,18 @@ EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) 
                                      "set the contact threshold on F_Y, e.g. 50");
   p.force_reference_n = o.non_negative("force_reference_n", op.force_reference_n(),
                                        "use 0 to derive it from the power limit");
-  p.force_safety_factor = op.force_safety_factor() == 0 ? 1.0
-                              : o.in_range("force_safety_factor", op.force_safety_factor(),
-                                           1.0, 10.0, "use 1 for no margin");
+  p.force_safety_factor = op.force_safety_factor() == 0
+                              ? 1.0
+                              : o.in_range("force_safety_factor", op.force_safety_factor(), 1.0,
+                                           10.0, "use 1 for no margin");
   p.model_time_constant_s = o.positive("model_time_constant_s", op.model_time_constant_s(),
                                        "set module L's closed-loop time constant, e.g. 0.1");
-  p.adaptive_time_constant_s =
-      o.positive("adaptive_time_constant_s", op.adaptive_time_constant_s(),
-                 "set module K's closed-loop time constant, e.g. 0.15");
+  p.adaptive_time_constant_s = o.positive("adaptive_time_constant_s", op.adaptive_time_constant_s(),
+                                          "set module K's closed-loop time constant, e.g. 0.15");
   p.rls_forgetting = o.in_range("rls_forgetting", op.rls_forgetting(), 0.5, 1.0,
                                 "set module H's forgetting factor, e.g. 0.95");
-  p.adaptive_feed_exponent = o.in_range("adaptive_feed_exponent", op.adaptive_feed_exponent(),
-                                        0.05, 1.5, "set the feed exponent alpha, e.g. 0.63");
+  p.adaptive_feed_exponent = o.in_range("adaptive_feed_exponent", op.adaptive_feed_exponent(), 0.05,
+                                        1.5, "set the feed exponent alpha, e.g. 0.63");
   p.chatter_threshold = o.in_range("chatter_threshold", op.chatter_threshold(), 1e-3, 1.0,
                                    "set module E's energy-ratio threshold, e.g. 0.3");
   p.chatter_confirm_revolutions = static_cast<int>(
@@ -110,9 +109,9 @@ EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) 
                  "set how many revolutions must exceed the threshold, e.g. 2"));
   p.chatter_band_low_hz = o.non_negative("chatter_band_low_hz", op.chatter_band_low_hz(),
                                          "set the chatter search band, e.g. 150");
-  p.chatter_band_high_hz = o.in_range("chatter_band_high_hz", op.chatter_band_high_hz(),
-                                      p.chatter_band_low_hz, 0.5 / p.sample_period_s,
-                                      "keep the band below the Nyquist frequency");
+  p.chatter_band_high_hz =
+      o.in_range("chatter_band_high_hz", op.chatter_band_high_hz(), p.chatter_band_low_hz,
+                 0.5 / p.sample_period_s, "keep the band below the Nyquist frequency");
   p.harmonic_guard_hz = o.non_negative("harmonic_guard_hz", op.harmonic_guard_hz(),
                                        "set the band ignored around tooth harmonics, e.g. 15");
   p.chatter_min_rms_n = o.non_negative("chatter_min_rms_n", op.chatter_min_rms_n(),

@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <string>
-#include <vector>
 #include <cstdio>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "smc/common/svg_plot.hpp"
 #include "smc_config.pb.h"
@@ -88,7 +88,8 @@ void add_marks(plot::Figure& fig, const RunResult& run, double min_gap) {
     }
   }
   for (size_t i = 0; i < marks.size(); ++i) {
-    fig.add_vertical(marks[i].t, labelled[i] ? marks[i].label : std::string()).color = marks[i].color;
+    fig.add_vertical(marks[i].t, labelled[i] ? marks[i].label : std::string()).color =
+        marks[i].color;
   }
 }
 
@@ -106,12 +107,13 @@ void write_plots(const std::string& dir, const EdgeCore& core, const RunResult& 
   }
   // About a label's width on a 1000 px wide plot.
   const double gap = (run.end_time_s > 0 ? run.end_time_s : 1.0) / 14.0;
-  const std::string name = std::string(variant_name(core.config().variant)) + " (" +
-                           core.config().config_id + ")";
+  const std::string name =
+      std::string(variant_name(core.config().variant)) + " (" + core.config().config_id + ")";
   {
     char title[200];
-    std::snprintf(title, sizeof title, "History of F_Y, %s: overshoot %.0f %%, peak %+.0f %% of F_ref",
-                  name.c_str(), summary.overshoot_pct(), summary.peak_force_violation_pct());
+    std::snprintf(title, sizeof title,
+                  "History of F_Y, %s: overshoot %.0f %%, peak %+.0f %% of F_ref", name.c_str(),
+                  summary.overshoot_pct(), summary.peak_force_violation_pct());
     plot::Figure fig(title);
     fig.set_size(1000, 480);
     fig.x_axis().label = "machine time (s)";
@@ -159,7 +161,8 @@ void write_plots(const std::string& dir, const EdgeCore& core, const RunResult& 
     fig.y_axis().label = "force (N)";
     fig.add_line("F_y", rt, ry);
     fig.add_line("F_z", rt, rz);
-    if (summary.chatter_detected_s() >= 0) fig.add_vertical(summary.chatter_detected_s(), "chatter detected");
+    if (summary.chatter_detected_s() >= 0)
+      fig.add_vertical(summary.chatter_detected_s(), "chatter detected");
     if (summary.chatter_onset_s() >= 0 && summary.chatter_onset_s() >= t0) {
       fig.add_vertical(summary.chatter_onset_s(), "onset");
     }

@@ -70,9 +70,8 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
       run.samples.push_back(TraceSample{d.force.t_s, d.x_mm, d.force.f_y_n, d.force.f_z_n,
                                         s.f_y_peak_n, s.force_reference_n, s.feedrate_cmd_mm_s,
                                         d.depth_mm, d.spindle_power_w, d.vibration_y_mm,
-                                        d.engagement,
-                                        static_cast<int16_t>(d.pass_index), d.in_pass, s.contact,
-                                        s.active, core.situation().active_steps});
+                                        d.engagement, static_cast<int16_t>(d.pass_index), d.in_pass,
+                                        s.contact, s.active, core.situation().active_steps});
     }
     while (core.events().try_pop(ev)) run.events.push_back(ev);
     while (core.revolutions().try_pop(rev)) run.revolutions.push_back(rev);
@@ -289,7 +288,8 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
   sum.set_feed_hold_s(hold_s);
   const int decimation =
       run.samples.size() > 1 && run.ticks > 0
-          ? static_cast<int>(std::lround(static_cast<double>(run.ticks) / static_cast<double>(run.samples.size())))
+          ? static_cast<int>(std::lround(static_cast<double>(run.ticks) /
+                                         static_cast<double>(run.samples.size())))
           : 1;
   const double onset = chatter_onset(run, p.samples_per_revolution, std::max(1, decimation));
   sum.set_chatter_onset_s(onset);

@@ -2,10 +2,10 @@
 
 namespace smc::transport {
 
-#define SMC_WIRE_TOPIC_DEF(T, NAME, QOS)                   \
-  const TypeSupport& TopicType<T>::get() {                 \
-    static const TypeSupport s{&T##_desc, NAME, QOS};      \
-    return s;                                              \
+#define SMC_WIRE_TOPIC_DEF(T, NAME, QOS)              \
+  const TypeSupport& TopicType<T>::get() {            \
+    static const TypeSupport s{&T##_desc, NAME, QOS}; \
+    return s;                                         \
   }
 
 SMC_WIRE_TOPIC_DEF(smc_data_ForceSummary, "smc_force_summary", QosProfile::telemetry(8))

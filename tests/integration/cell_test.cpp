@@ -55,8 +55,9 @@ class Cell : public ::testing::Test {
   static std::string bin(const std::string& name) { return smc::test::bin_path(name); }
 
   void start_cell() {
-    cell_.emplace(std::vector<std::string>{bin("smc-cell"), "--log-level", "warn", "serve", "--db", db_,
-                                           "--partition", partition_, "--edge-grace-ms", "1500"});
+    cell_.emplace(std::vector<std::string>{bin("smc-cell"), "--log-level", "warn", "serve", "--db",
+                                           db_, "--partition", partition_, "--edge-grace-ms",
+                                           "1500"});
   }
   void start_edge(const std::string& machine) {
     edges_[machine].reset();
@@ -68,7 +69,9 @@ class Cell : public ::testing::Test {
   }
   std::string submit(const std::string& file) {
     auto before = jobs();
-    EXPECT_EQ(run_cmd({bin("smc-cell"), "--log-level", "warn", "job", "submit", src(file), "--db", db_}), 0);
+    EXPECT_EQ(
+        run_cmd({bin("smc-cell"), "--log-level", "warn", "job", "submit", src(file), "--db", db_}),
+        0);
     for (const auto& j : jobs()) {
       bool known = false;
       for (const auto& b : before) known = known || b.id == j.id;
@@ -128,7 +131,8 @@ TEST_F(Cell, DemoJobsCompleteWithTheExpectedSmcChoice) {
   const std::string js = submit("cell/jobs/job_shop.json");
   ASSERT_FALSE(tl.empty());
   ASSERT_FALSE(js.empty());
-  ASSERT_TRUE(wait_jobs({tl, js}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 180s))
+  ASSERT_TRUE(wait_jobs(
+      {tl, js}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 180s))
       << "jobs did not finish";
   const auto a = *job(tl);
   const auto b = *job(js);
@@ -152,7 +156,8 @@ TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {
   start_edge("mill-2");
   const std::string tl = submit("cell/jobs/transfer_line.textproto");
   const std::string js = submit("cell/jobs/job_shop.json");
-  ASSERT_TRUE(wait_jobs({tl, js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+  ASSERT_TRUE(wait_jobs(
+      {tl, js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
   cell_->kill(SIGKILL);
   cell_->wait();
   cell_.reset();
@@ -161,7 +166,8 @@ TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {
   ASSERT_FALSE(late.empty());
   std::this_thread::sleep_for(1s);  // the cell stays down a while; the edges go on
   start_cell();
-  ASSERT_TRUE(wait_jobs({tl, js, late}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 240s));
+  ASSERT_TRUE(wait_jobs(
+      {tl, js, late}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 240s));
   for (const auto& id : {tl, js}) {
     const auto ev = events(id);
     EXPECT_EQ(count_to(ev, cfg::JOB_RUNNING), 1) << id << " ran more than once";
@@ -174,25 +180,29 @@ TEST_F(Cell, KilledEdgeInterruptsItsJobWhichIsRequeued) {
   start_cell();
   start_edge("mill-1");
   const std::string js = submit("cell/jobs/job_shop.json");
-  ASSERT_TRUE(wait_jobs({js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
   ASSERT_EQ(job(js)->machine_id, "mill-1");
   const auto t_kill = Clock::now();
   edges_["mill-1"]->kill(SIGKILL);
   edges_["mill-1"]->wait();
-  ASSERT_TRUE(wait_jobs({js}, [](const store::Job& j) { return j.state != cfg::JOB_RUNNING; }, 30s));
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return j.state != cfg::JOB_RUNNING; }, 30s));
   const double detect_s = std::chrono::duration<double>(Clock::now() - t_kill).count();
   // Lease 1 s + grace 1.5 s + polling: within 5 s.
   EXPECT_LT(detect_s, 5.0);
   // Interrupted, then re-queued (and planned again, waiting for a mill).
-  ASSERT_TRUE(wait_jobs({js}, [](const store::Job& j) {
-    return j.state == cfg::JOB_QUEUED || j.state == cfg::JOB_PLANNED;
-  }, 10s));
+  ASSERT_TRUE(wait_jobs(
+      {js},
+      [](const store::Job& j) { return j.state == cfg::JOB_QUEUED || j.state == cfg::JOB_PLANNED; },
+      10s));
   const auto ev = events(js);
   EXPECT_EQ(count_to(ev, cfg::JOB_INTERRUPTED), 1);
   EXPECT_EQ(count_to(ev, cfg::JOB_QUEUED), 2) << "submitted, then re-queued";
   // Policy: re-queued and dispatched to the next idle mill.
   start_edge("mill-2");
-  ASSERT_TRUE(wait_jobs({js}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 120s));
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 120s));
   EXPECT_EQ(job(js)->machine_id, "mill-2");
   EXPECT_EQ(job(js)->attempt, 2u);
   std::printf("edge loss detected in %.2f s\n", detect_s);
@@ -202,11 +212,13 @@ TEST_F(Cell, EdgeRestartedMidJobDoesNotCutTheSameAttemptAgain) {
   start_cell();
   start_edge("mill-1");
   const std::string js = submit("cell/jobs/job_shop.json");
-  ASSERT_TRUE(wait_jobs({js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
   edges_["mill-1"]->kill(SIGKILL);
   edges_["mill-1"]->wait();
   start_edge("mill-1");  // at once: well within the lease and the grace
-  ASSERT_TRUE(wait_jobs({js}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 120s));
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 120s));
   const auto ev = events(js);
   EXPECT_EQ(count_to(ev, cfg::JOB_INTERRUPTED), 1) << "the restart is reported, not hidden";
   EXPECT_EQ(count_to(ev, cfg::JOB_RUNNING), 2);

@@ -16,8 +16,8 @@ namespace {
 std::string describe(const store::ProcessModel& m) {
   std::ostringstream o;
   o << store::kind_name(m.kind) << " model " << m.id << " (" << store::provenance_name(m.provenance)
-    << (m.validated ? ", validated" : ", not validated") << (m.part_id.empty() ? "" : ", part " + m.part_id)
-    << ")";
+    << (m.validated ? ", validated" : ", not validated")
+    << (m.part_id.empty() ? "" : ", part " + m.part_id) << ")";
   return o.str();
 }
 
@@ -44,9 +44,12 @@ Selection select_variant(const PlanInputs& in) {
   } else {
     sel.variant = smc::config::SMC_II;
     why << "SMC II (job shop): ";
-    if (!sel.force && !sel.milling) why << "no validated models";
-    else if (!sel.force) why << "no validated force-process model";
-    else why << "no validated structural model";
+    if (!sel.force && !sel.milling)
+      why << "no validated models";
+    else if (!sel.force)
+      why << "no validated force-process model";
+    else
+      why << "no validated structural model";
     why << ", so the job runs as programmed with chatter detection and suppression and the "
            "adaptive force controller.";
   }
@@ -116,9 +119,9 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
                                std::to_string(passes) + " passes (at most 16)");
     }
     std::ostringstream why;
-    why << c.explanation() << " Critical depth at " << rpm << " rpm: "
-        << out.critical_depth_mm << " mm; with a " << margin << " margin, " << passes
-        << " equal pass" << (passes == 1 ? "" : "es") << " of " << job.depth_mm() / passes << " mm.";
+    why << c.explanation() << " Critical depth at " << rpm << " rpm: " << out.critical_depth_mm
+        << " mm; with a " << margin << " margin, " << passes << " equal pass"
+        << (passes == 1 ? "" : "es") << " of " << job.depth_mm() / passes << " mm.";
     c.set_explanation(why.str());
   } else {
     c.set_grafcet_name("smc2.grafcet");

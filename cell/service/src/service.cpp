@@ -76,7 +76,7 @@ struct CellService::Impl {
   tr::WaitSet waitset;
 
   std::map<std::string, Mill> mills;
-  std::map<std::string, Progress> progress;                 // by job id
+  std::map<std::string, Progress> progress;                             // by job id
   std::map<std::string, std::vector<machining::ForceSample>> learning;  // by job id
   std::set<uint64_t> chatter_seen;
   int64_t data_version = -1;
@@ -147,7 +147,8 @@ struct CellService::Impl {
             const std::string& machine = {}) {
     const auto ev = db.transition(j.id, j.state, to, reason, machine);
     if (!ev) return false;
-    spdlog::info("job {}: {} -> {} ({})", j.id, store::state_name(j.state), store::state_name(to), reason);
+    spdlog::info("job {}: {} -> {} ({})", j.id, store::state_name(j.state), store::state_name(to),
+                 reason);
     if (auto now = db.job(j.id)) publish_status(*now, reason);
     return true;
   }
@@ -185,8 +186,8 @@ struct CellService::Impl {
         const Selection sel = select_variant(in);
         const Plan plan = planner.plan(in, sel);
         // Verify now: the configuration the edge will get must be valid.
-        const store::Machine m = *db.machine(j.spec.machine_id().empty() ? mills.begin()->first
-                                                                         : j.spec.machine_id());
+        const store::Machine m =
+            *db.machine(j.spec.machine_id().empty() ? mills.begin()->first : j.spec.machine_id());
         (void)smc::edge::edge_config_from_proto(Planner::for_machine(plan.config, m, "check"));
         db.set_plan(j.id, sel.variant, plan.config.explanation(), plan.config);
         move(*db.job(j.id), cfg::JOB_PLANNED,
@@ -223,7 +224,9 @@ struct CellService::Impl {
         const auto m = db.machine(id);
         if (!m) continue;
         const uint32_t attempt = j.attempt + 1;
-        if (!move(j, cfg::JOB_ASSIGNED, "dispatched to " + id + " (attempt " + std::to_string(attempt) + ")", id)) break;
+        if (!move(j, cfg::JOB_ASSIGNED,
+                  "dispatched to " + id + " (attempt " + std::to_string(attempt) + ")", id))
+          break;
         send(*db.job(j.id), *m, attempt);
         busy.insert(id);
         break;
@@ -238,7 +241,8 @@ struct CellService::Impl {
       for (const auto& j : db.jobs({.state = s, .with_documents = true})) {
         const auto m = db.machine(j.machine_id);
         if (!m || !j.plan) continue;
-        spdlog::info("job {}: resuming as {} on {}", j.id, store::state_name(j.state), j.machine_id);
+        spdlog::info("job {}: resuming as {} on {}", j.id, store::state_name(j.state),
+                     j.machine_id);
         send(j, *m, j.attempt);
       }
     }
@@ -272,7 +276,8 @@ struct CellService::Impl {
         if (m.alive) continue;
         const auto since = std::max(m.lost_since, started);
         if (now - since < opt.edge_grace) continue;
-        interrupt(j, "edge " + j.machine_id + (m.seen ? " lost (liveliness)" : " not seen since the cell started"));
+        interrupt(j, "edge " + j.machine_id +
+                         (m.seen ? " lost (liveliness)" : " not seen since the cell started"));
       }
     }
   }
@@ -282,10 +287,12 @@ struct CellService::Impl {
     withdraw(j.machine_id);
     const auto now = *db.job(j.id);
     if (now.attempt < opt.max_attempts) {
-      move(now, cfg::JOB_QUEUED, "re-queued after attempt " + std::to_string(now.attempt) + " of " +
-                                     std::to_string(opt.max_attempts));
+      move(now, cfg::JOB_QUEUED,
+           "re-queued after attempt " + std::to_string(now.attempt) + " of " +
+               std::to_string(opt.max_attempts));
     } else {
-      move(now, cfg::JOB_FAILED, "interrupted on every one of " + std::to_string(opt.max_attempts) + " attempts");
+      move(now, cfg::JOB_FAILED,
+           "interrupted on every one of " + std::to_string(opt.max_attempts) + " attempts");
     }
   }
 
@@ -306,8 +313,10 @@ struct CellService::Impl {
       const std::string msg = get_string(p.message);
       switch (p.phase) {
         case smc_data_JOB_RUNNING:
-          if (j->state == cfg::JOB_ASSIGNED) move(*j, cfg::JOB_RUNNING, "edge " + j->machine_id + ": " + msg);
-          else if (j->state == cfg::JOB_RUNNING) publish_status(*j, msg);
+          if (j->state == cfg::JOB_ASSIGNED)
+            move(*j, cfg::JOB_RUNNING, "edge " + j->machine_id + ": " + msg);
+          else if (j->state == cfg::JOB_RUNNING)
+            publish_status(*j, msg);
           break;
         case smc_data_JOB_DONE:
           if (j->state == cfg::JOB_ASSIGNED) move(*j, cfg::JOB_RUNNING, "edge reported progress");
@@ -327,12 +336,15 @@ struct CellService::Impl {
               const auto m = db.machine(cur->machine_id);
               const double v = 2 * 3.141592653589793 * pl.operation().cutter_radius_mm() * 1e-3 *
                                pl.program().passes(0).spindle_rpm() / 60.0;
-              const double sf = pl.operation().force_safety_factor() > 0 ? pl.operation().force_safety_factor() : 1;
+              const double sf = pl.operation().force_safety_factor() > 0
+                                    ? pl.operation().force_safety_factor()
+                                    : 1;
               const double ref = pl.operation().force_reference_n() > 0
                                      ? pl.operation().force_reference_n()
                                      : (m ? m->max_spindle_power_w : 0) / v / sf;
               r.set_force_reference_n(ref);
-              if (ref > 0) r.set_overshoot_pct(100.0 * (static_cast<double>(p.peak_force_n) - ref) / ref);
+              if (ref > 0)
+                r.set_overshoot_pct(100.0 * (static_cast<double>(p.peak_force_n) - ref) / ref);
             }
             db.record_result(job_id, r);
             move(*db.job(job_id), cfg::JOB_DONE, "edge " + cur->machine_id + ": " + msg);
@@ -348,7 +360,8 @@ struct CellService::Impl {
           }
           break;
         case smc_data_JOB_INTERRUPTED:
-          if (j->state == cfg::JOB_RUNNING || j->state == cfg::JOB_ASSIGNED) interrupt(*j, "edge " + j->machine_id + ": " + msg);
+          if (j->state == cfg::JOB_RUNNING || j->state == cfg::JOB_ASSIGNED)
+            interrupt(*j, "edge " + j->machine_id + ": " + msg);
           break;
         case smc_data_JOB_ASSIGNED:
           break;
@@ -360,7 +373,8 @@ struct CellService::Impl {
     chatter_reader.take([&](const smc_data_ChatterEvent& e, const tr::SampleInfo& info) {
       if (!info.valid_data || !chatter_seen.insert(e.event_id).second) return;
       spdlog::warn("{}: chatter ({}) at {:.0f} Hz in job {}, program now {} passes",
-                   get_string(e.machine_id), e.source == smc_data_CHATTER_AUTOMATIC ? "automatic" : "operator",
+                   get_string(e.machine_id),
+                   e.source == smc_data_CHATTER_AUTOMATIC ? "automatic" : "operator",
                    e.frequency_hz, get_string(e.job_id), e.new_pass_count);
     });
   }
@@ -400,7 +414,8 @@ struct CellService::Impl {
       fmax = std::max(fmax, s.feed_mm_per_tooth);
     }
     machining::FitOptions fo;
-    std::string note = "fitted from " + std::to_string(samples.size()) + " revolutions of job " + j.id;
+    std::string note =
+        "fitted from " + std::to_string(samples.size()) + " revolutions of job " + j.id;
     if (dmax < 1.2 * dmin) {
       fo.fixed_beta = 0.65;
       note += "; beta held at 0.65 (one depth)";
@@ -423,8 +438,9 @@ struct CellService::Impl {
       pm.fit = pm.force.fit();
       pm.note = note;
       const std::string id = db.add_model(pm);
-      spdlog::info("job {}: candidate force model {}: K={:.3f} kN beta={:.2f} alpha={:.2f}, R^2={:.3f} ({})",
-                   j.id, id, fit.k_kn, fit.beta, fit.alpha, fit.fit ? fit.fit->r_squared : 0.0, note);
+      spdlog::info(
+          "job {}: candidate force model {}: K={:.3f} kN beta={:.2f} alpha={:.2f}, R^2={:.3f} ({})",
+          j.id, id, fit.k_kn, fit.beta, fit.alpha, fit.fit ? fit.fit->r_squared : 0.0, note);
     } catch (const std::exception& e) {
       spdlog::warn("job {}: no force model fitted: {}", j.id, e.what());
     }
@@ -434,7 +450,8 @@ struct CellService::Impl {
   // -------------------------------------------------------------- loop --
 
   int run(const std::atomic<bool>& stop) {
-    spdlog::info("cell: database {} (schema {}), {} machines", opt.db_path, db.schema_version(), mills.size());
+    spdlog::info("cell: database {} (schema {}), {} machines", opt.db_path, db.schema_version(),
+                 mills.size());
     resume();
     for (const auto& j : db.jobs({.with_documents = true})) publish_status(j, "current");
     std::vector<int64_t> fired;
@@ -460,7 +477,8 @@ struct CellService::Impl {
   }
 };
 
-CellService::CellService(ServiceOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+CellService::CellService(ServiceOptions options)
+    : impl_(std::make_unique<Impl>(std::move(options))) {}
 CellService::~CellService() = default;
 int CellService::run(const std::atomic<bool>& stop) { return impl_->run(stop); }
 

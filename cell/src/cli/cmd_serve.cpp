@@ -1,7 +1,6 @@
 // smc-cell serve / plan: the cell service, and one job's plan offline.
 
 #include <CLI/CLI.hpp>
-
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -39,11 +38,13 @@ SMC_CELL_COMMAND(serve, 10) {
       "Jobs reach it through the database (smc-cell job submit). Stops on SIGINT/SIGTERM.");
   sub->add_option("--db", opt->db_path, "Cell database (create it with smc-cell db init --seed)")
       ->capture_default_str();
-  sub->add_option("--data", *data, "Folder with grafcets/ and configs/ (default: the source tree's cell/)");
+  sub->add_option("--data", *data,
+                  "Folder with grafcets/ and configs/ (default: the source tree's cell/)");
   sub->add_option("--domain", opt->domain_id, "DDS domain id")->capture_default_str();
   sub->add_option("--partition", opt->partition, "DDS partition (isolates a cell)");
-  sub->add_option("--edge-grace-ms", *grace_ms,
-                  "An edge silent this long (liveliness lost, or not seen since start) interrupts its job")
+  sub->add_option(
+         "--edge-grace-ms", *grace_ms,
+         "An edge silent this long (liveliness lost, or not seen since start) interrupts its job")
       ->capture_default_str();
   sub->add_option("--max-attempts", opt->max_attempts, "Attempts before an interrupted job fails")
       ->capture_default_str();
@@ -70,7 +71,8 @@ SMC_CELL_COMMAND(plan, 11) {
   auto out = std::make_shared<std::string>();
   CLI::App* sub = app.add_subcommand(
       "plan", "Select SMC I or SMC II for a job and plan it, without running it");
-  sub->add_option("JOB", *job_ref, "A job file (textproto or JSON) or the id of a stored job")->required();
+  sub->add_option("JOB", *job_ref, "A job file (textproto or JSON) or the id of a stored job")
+      ->required();
   sub->add_option("--db", *db_path, "Cell database")->capture_default_str();
   sub->add_option("--data", *data, "Folder with grafcets/ and configs/");
   sub->add_option("--out", *out, "Write the planned SupervisorConfig here (textproto)");

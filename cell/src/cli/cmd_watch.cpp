@@ -1,7 +1,6 @@
 // smc-cell job watch: a live table of jobs until they finish.
 
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cstdio>
 #include <thread>
@@ -47,19 +46,23 @@ SMC_CELL_COMMAND(watch, 25) {
         std::printf("%-11s %-10s %-12s %-8s %-7s %-7s %-9s %-10s %s\n", j.id.c_str(),
                     j.spec.part_id().c_str(), std::string(store::state_name(j.state)).c_str(),
                     j.plan ? std::string(store::variant_name(j.variant)).c_str() : "-",
-                    j.machine_id.empty() ? "-" : j.machine_id.c_str(), passes, chatter, over, cycle);
+                    j.machine_id.empty() ? "-" : j.machine_id.c_str(), passes, chatter, over,
+                    cycle);
       }
       std::fflush(stdout);
       if (all_done) {
         for (const auto& j : jobs) {
           bool watched = ids->empty();
           for (const auto& id : *ids) watched = watched || id == j.id;
-          if (watched && !j.explanation.empty()) std::printf("\n%s: %s\n", j.id.c_str(), j.explanation.c_str());
+          if (watched && !j.explanation.empty())
+            std::printf("\n%s: %s\n", j.id.c_str(), j.explanation.c_str());
         }
         return;
       }
-      const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      if (*timeout > 0 && waited > *timeout) throw smc::cell::cli::Failure(4, "timed out waiting for jobs");
+      const double waited =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (*timeout > 0 && waited > *timeout)
+        throw smc::cell::cli::Failure(4, "timed out waiting for jobs");
       std::this_thread::sleep_for(std::chrono::duration<double>(*interval));
     }
   });

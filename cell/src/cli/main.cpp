@@ -2,7 +2,6 @@
 // offline tools. Thin: flag parsing only; each subcommand calls a library.
 
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <cstdio>
 

@@ -38,8 +38,8 @@ struct Failure : std::runtime_error {
 }  // namespace smc::cell::cli
 
 // `order` sorts subcommands in --help.
-#define SMC_CELL_COMMAND(name, order)                                                  \
-  static void smc_cell_register_##name(CLI::App& app);                               \
-  static const ::smc::cell::cli::Register smc_cell_register_obj_##name(order,        \
+#define SMC_CELL_COMMAND(name, order)                                                              \
+  static void smc_cell_register_##name(CLI::App& app);                                             \
+  static const ::smc::cell::cli::Register smc_cell_register_obj_##name(order,                      \
                                                                        &smc_cell_register_##name); \
   static void smc_cell_register_##name(CLI::App& app)

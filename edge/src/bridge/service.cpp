@@ -1,15 +1,14 @@
 #include "smc/edge/service.hpp"
 
 #include <spdlog/spdlog.h>
-
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <map>
-#include <stdexcept>
 #include <optional>
 #include <set>
+#include <stdexcept>
 #include <thread>
 
 #include "smc/common/clock.hpp"
@@ -194,10 +193,10 @@ struct EdgeService::Impl {
     set_string(st.job_id, job ? job->assignment.job_id() : "");
     if (job) {
       st.loop_overruns = job->rt->loop().overruns();
-      st.loop_latency_p99_us = static_cast<uint32_t>(
-          std::chrono::duration_cast<std::chrono::microseconds>(
-              job->rt->loop().latency().percentile(0.99))
-              .count());
+      st.loop_latency_p99_us =
+          static_cast<uint32_t>(std::chrono::duration_cast<std::chrono::microseconds>(
+                                    job->rt->loop().latency().percentile(0.99))
+                                    .count());
     }
     set_string(st.message, message);
     status_writer.write(st);
@@ -221,7 +220,8 @@ struct EdgeService::Impl {
     smc::config::MillingModel own;
     smc::documents::load(opt.mill_model_file, own);
     if (cfg.milling_model().has_cutter()) *own.mutable_cutter() = cfg.milling_model().cutter();
-    if (cfg.milling_model().has_workpiece()) *own.mutable_workpiece() = cfg.milling_model().workpiece();
+    if (cfg.milling_model().has_workpiece())
+      *own.mutable_workpiece() = cfg.milling_model().workpiece();
     *cfg.mutable_milling_model() = own;
   }
 
@@ -248,7 +248,8 @@ struct EdgeService::Impl {
           smc::config::SupervisorConfig cfg = doc;
           const std::string why = check(cfg);
           if (!why.empty()) {
-            spdlog::error("{}: configuration '{}' rejected: {}", opt.machine_id, cfg.config_id(), why);
+            spdlog::error("{}: configuration '{}' rejected: {}", opt.machine_id, cfg.config_id(),
+                          why);
             message = "configuration '" + cfg.config_id() + "' rejected: " + why.substr(0, 90);
             publish_status();
             return;
@@ -265,8 +266,8 @@ struct EdgeService::Impl {
         [&](const tr::DocumentError& e) {
           if (e.key != opt.machine_id) return;
           spdlog::error("{}: configuration rejected: {}", opt.machine_id, e.message);
-          message = std::string("configuration rejected (") + tr::to_string(e.fault) + "): " +
-                    e.message.substr(0, 80);
+          message = std::string("configuration rejected (") + tr::to_string(e.fault) +
+                    "): " + e.message.substr(0, 80);
           publish_status();
         });
   }
@@ -284,7 +285,8 @@ struct EdgeService::Impl {
           waiting = a;
         },
         [&](const tr::DocumentError& e) {
-          if (e.key == opt.machine_id) spdlog::error("{}: assignment rejected: {}", opt.machine_id, e.message);
+          if (e.key == opt.machine_id)
+            spdlog::error("{}: assignment rejected: {}", opt.machine_id, e.message);
         });
     if (!waiting || job) return;
     const std::string tag = waiting->job_id() + "#" + std::to_string(waiting->attempt());
@@ -380,7 +382,8 @@ struct EdgeService::Impl {
     const double total = prog.total_depth_mm();
     const int pass = job->latest.pass_index;
     p.depth_removed_mm = static_cast<float>(job->done ? total : prog.depth_before(pass));
-    p.fraction_done = static_cast<float>(total > 0 ? static_cast<double>(p.depth_removed_mm) / total : 0.0);
+    p.fraction_done =
+        static_cast<float>(total > 0 ? static_cast<double>(p.depth_removed_mm) / total : 0.0);
     p.chatter_events = job->chatter_events;
     p.peak_force_n = static_cast<float>(job->peak_force_n);
     set_string(p.message, why);
@@ -404,7 +407,7 @@ struct EdgeService::Impl {
 
   void finish_job() {
     stop_loop();
-    drain();  // whatever the loop produced last
+    drain();                                     // whatever the loop produced last
     job->done = job->done || job->core->done();  // the loop has stopped: safe to look
     if (pending_chatter) {
       chatter_writer.write(*pending_chatter);
@@ -518,7 +521,8 @@ struct EdgeService::Impl {
         situation_writer.write(s);
         const bool hold = (e.active & bit(ModuleId::C)) != 0;
         if (hold && state == smc_data_EDGE_RUNNING) set_state(smc_data_EDGE_FEED_HOLD, "feed hold");
-        if (!hold && state == smc_data_EDGE_FEED_HOLD) set_state(smc_data_EDGE_RUNNING, "running job " + job->assignment.job_id());
+        if (!hold && state == smc_data_EDGE_FEED_HOLD)
+          set_state(smc_data_EDGE_RUNNING, "running job " + job->assignment.job_id());
         break;
       }
       case EventKind::kChatterDetected:
@@ -560,8 +564,10 @@ struct EdgeService::Impl {
           chatter_writer.write(*pending_chatter);
           pending_chatter.reset();
         }
-        spdlog::warn("{}: chatter suppressor rewrote the program to {} passes", opt.machine_id, fp.count);
-        publish_progress(smc_data_JOB_RUNNING, "program rewritten to " + std::to_string(fp.count) + " passes");
+        spdlog::warn("{}: chatter suppressor rewrote the program to {} passes", opt.machine_id,
+                     fp.count);
+        publish_progress(smc_data_JOB_RUNNING,
+                         "program rewritten to " + std::to_string(fp.count) + " passes");
         break;
       }
       case EventKind::kFault: {
@@ -575,8 +581,8 @@ struct EdgeService::Impl {
         break;
       case EventKind::kPassStarted:
       case EventKind::kPassCompleted:
-        publish_progress(smc_data_JOB_RUNNING, std::string(to_string(e.kind)) + " " +
-                                                   std::to_string(e.pass_index + 1));
+        publish_progress(smc_data_JOB_RUNNING,
+                         std::string(to_string(e.kind)) + " " + std::to_string(e.pass_index + 1));
         break;
       case EventKind::kProgramDone:
         job->done = true;
@@ -612,7 +618,8 @@ struct EdgeService::Impl {
   }
 };
 
-EdgeService::EdgeService(ServiceOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+EdgeService::EdgeService(ServiceOptions options)
+    : impl_(std::make_unique<Impl>(std::move(options))) {}
 EdgeService::~EdgeService() = default;
 int EdgeService::run(const std::atomic<bool>& stop) { return impl_->run(stop); }
 

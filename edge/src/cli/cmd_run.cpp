@@ -1,7 +1,6 @@
 // smc-edge run: the edge process of one mill on DDS.
 
 #include <CLI/CLI.hpp>
-
 #include <atomic>
 #include <csignal>
 

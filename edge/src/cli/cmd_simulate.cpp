@@ -1,7 +1,6 @@
 // smc-edge simulate / check: offline runs of the edge on the simulated mill.
 
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -44,20 +43,23 @@ void print_summary(const smc::config::RunSummary& s, const std::string& out) {
               s.config_id().c_str(), s.completed() ? "completed" : "NOT completed",
               s.cycle_time_s(), s.passes_completed(), s.passes_planned(), s.program_rewrites(),
               s.program_rewrites() == 1 ? "" : "s");
-  std::printf("  F_ref %.1f N; peak F_Y %.1f N (%+.0f %% of F_ref); peak spindle power %.0f W "
-              "(%+.0f %% of the limit)\n",
-              s.force_reference_n(), s.peak_force_n(), s.peak_force_violation_pct(),
-              s.peak_power_w(), s.peak_power_violation_pct());
+  std::printf(
+      "  F_ref %.1f N; peak F_Y %.1f N (%+.0f %% of F_ref); peak spindle power %.0f W "
+      "(%+.0f %% of the limit)\n",
+      s.force_reference_n(), s.peak_force_n(), s.peak_force_violation_pct(), s.peak_power_w(),
+      s.peak_power_violation_pct());
   std::printf("  overshoot %.1f %%; steady-state error %.1f %%; chatter events %u",
               s.overshoot_pct(), s.steady_state_error_pct(), s.chatter_events());
   if (s.chatter_onset_s() >= 0) std::printf("; onset %.2f s", s.chatter_onset_s());
   if (s.chatter_detected_s() >= 0) std::printf("; detected %.2f s", s.chatter_detected_s());
-  if (s.detection_delay_s() >= 0) std::printf(" (%.0f ms after onset)", 1000 * s.detection_delay_s());
+  if (s.detection_delay_s() >= 0)
+    std::printf(" (%.0f ms after onset)", 1000 * s.detection_delay_s());
   std::printf("\n");
   for (const auto& f : s.faults()) std::printf("  fault: %s\n", f.c_str());
-  std::printf("  wrote %s/{samples.csv,revolutions.csv,events.csv,summary.json,force.svg,"
-              "feed.svg,raw.svg}\n",
-              out.c_str());
+  std::printf(
+      "  wrote %s/{samples.csv,revolutions.csv,events.csv,summary.json,force.svg,"
+      "feed.svg,raw.svg}\n",
+      out.c_str());
 }
 
 }  // namespace
@@ -123,7 +125,8 @@ void add_simulate(CLI::App& app) {
       }
     };
     RunResult run = run_virtual(core, opts);
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!args->quiet) std::fprintf(stderr, "\r%60s\r", "");
     const auto summary = summarize(core, run);
     write_outputs(args->out, core, run, summary);

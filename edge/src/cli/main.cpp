@@ -2,7 +2,6 @@
 // Thin: flags only; everything else is in the smc_edge library.
 
 #include <CLI/CLI.hpp>
-
 #include <cstdio>
 #include <string>
 #include <vector>

@@ -45,8 +45,8 @@ ReplayDrive::ReplayDrive(const std::string& path, double sample_period_s)
       auto it = col.find(name);
       if (it == col.end()) return fallback;
       if (it->second >= cells.size()) {
-        throw std::runtime_error(path + ":" + std::to_string(lineno) + ": missing column '" +
-                                 name + "'");
+        throw std::runtime_error(path + ":" + std::to_string(lineno) + ": missing column '" + name +
+                                 "'");
       }
       const std::string& c = cells[it->second];
       char* end = nullptr;

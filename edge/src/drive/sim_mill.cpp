@@ -144,7 +144,9 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
   s.trace_z.assign(steps, 0.0);
   const double rate = 1.0 / s.sim.internal_step_s();
   // A cut-off of 0 (or above Nyquist) means no filter on that channel.
-  auto cfg = [&](LowPass& lp, double hz) { lp.configure(hz > 0 && hz < rate / 2 ? hz : rate * 0.45, rate); };
+  auto cfg = [&](LowPass& lp, double hz) {
+    lp.configure(hz > 0 && hz < rate / 2 ? hz : rate * 0.45, rate);
+  };
   cfg(s.lp_x, sim.f_y_cutoff_hz());
   cfg(s.lp_y, sim.f_y_cutoff_hz());
   cfg(s.lp_z, sim.f_z_cutoff_hz());
@@ -242,7 +244,9 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
       if (tip >= 0 && tip <= s.length()) ++in_cut;
     }
   }
-  out.engagement = s.band_cos.empty() ? 0.0 : static_cast<double>(in_cut) / static_cast<double>(s.band_cos.size());
+  out.engagement = s.band_cos.empty()
+                       ? 0.0
+                       : static_cast<double>(in_cut) / static_cast<double>(s.band_cos.size());
 
   // Pass sequencing.
   if (s.phase == Phase::kCutting && x - s.radius() > s.length()) {
@@ -260,8 +264,8 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
       s.phase = Phase::kCutting;
     }
   }
-  const bool bad = (status & (machining::StepStatus::kInvalidInput |
-                              machining::StepStatus::kNotFinite)) != 0;
+  const bool bad =
+      (status & (machining::StepStatus::kInvalidInput | machining::StepStatus::kNotFinite)) != 0;
   return bad ? Status::kError : Status::kOk;
 }
 

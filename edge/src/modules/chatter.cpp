@@ -1,9 +1,8 @@
 // Module E: automatic chatter detector.
 
-#include <unsupported/Eigen/FFT>
-
 #include <algorithm>
 #include <cmath>
+#include <unsupported/Eigen/FFT>
 
 #include "smc/edge/modules.hpp"
 

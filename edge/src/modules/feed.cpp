@@ -13,13 +13,13 @@ void FeedrateRoutine::configure(const EdgeParameters& p) { p_ = p; }
 
 Status FeedrateRoutine::update(Signals& s) noexcept {
   const bool hold = (s.active & bit(ModuleId::C)) != 0 || s.suppression_hold || !s.in_pass;
-  const bool control = (s.active & (bit(ModuleId::K) | bit(ModuleId::L))) != 0 &&
-                       s.controller_valid;
+  const bool control =
+      (s.active & (bit(ModuleId::K) | bit(ModuleId::L))) != 0 && s.controller_valid;
   double feedrate = s.programmed_feedrate_mm_s;
   if (control) feedrate = p_.feedrate_for(s.controller_feed_per_tooth_mm, s.spindle_rpm);
   if (hold) feedrate = 0;
-  const double limit = std::min(p_.max_feedrate_mm_s,
-                                p_.feedrate_for(p_.max_feed_per_tooth_mm, s.spindle_rpm));
+  const double limit =
+      std::min(p_.max_feedrate_mm_s, p_.feedrate_for(p_.max_feed_per_tooth_mm, s.spindle_rpm));
   s.feed_limited = feedrate > limit || !(feedrate >= 0);
   if (!(feedrate >= 0)) feedrate = 0;  // NaN or negative: stop
   feedrate = std::min(feedrate, limit);

@@ -122,8 +122,7 @@ Status AdaptiveForceController::update(Signals& s) noexcept {
     law_.start(p_.feed_per_tooth_for(s.programmed_feedrate_mm_s, s.spindle_rpm));
     started_ = true;
   } else if (s.f_y_updated && s.gain_valid) {
-    law_.step(s.f_y_peak_n, s.force_reference_n, s.gain_estimate,
-              max_feed_now(p_, s.spindle_rpm));
+    law_.step(s.f_y_peak_n, s.force_reference_n, s.gain_estimate, max_feed_now(p_, s.spindle_rpm));
   }
   s.controller_feed_per_tooth_mm = law_.feed_per_tooth();
   s.controller_valid = true;

@@ -74,10 +74,12 @@ const Situation& OperationSupervisor::evaluate(uint32_t inputs) noexcept {
   const grafcet::Evaluation& e = impl_->engine.evaluate(in);
   ModuleMask active = 0, impulses = 0;
   for (uint64_t m = e.level_actions; m != 0; m &= m - 1) {
-    active = static_cast<ModuleMask>(active | impl_->action_module[static_cast<size_t>(__builtin_ctzll(m))]);
+    active = static_cast<ModuleMask>(active |
+                                     impl_->action_module[static_cast<size_t>(__builtin_ctzll(m))]);
   }
   for (uint64_t m = e.impulse_actions; m != 0; m &= m - 1) {
-    impulses = static_cast<ModuleMask>(impulses | impl_->action_module[static_cast<size_t>(__builtin_ctzll(m))]);
+    impulses = static_cast<ModuleMask>(
+        impulses | impl_->action_module[static_cast<size_t>(__builtin_ctzll(m))]);
   }
   situation_.active_steps = e.active_steps;
   situation_.active = active;
@@ -92,9 +94,7 @@ int OperationSupervisor::step_number(int index) const {
   return static_cast<int>(impl_->engine.step_number(static_cast<size_t>(index)));
 }
 
-int OperationSupervisor::step_count() const {
-  return static_cast<int>(impl_->engine.num_steps());
-}
+int OperationSupervisor::step_count() const { return static_cast<int>(impl_->engine.num_steps()); }
 
 const std::string& OperationSupervisor::name() const { return impl_->grafcet.name(); }
 

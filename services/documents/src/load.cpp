@@ -34,9 +34,7 @@ class Collector final : public google::protobuf::io::ErrorCollector {
   std::ostringstream out_;
 };
 
-bool is_json(const std::string& path) {
-  return std::filesystem::path(path).extension() == ".json";
-}
+bool is_json(const std::string& path) { return std::filesystem::path(path).extension() == ".json"; }
 
 }  // namespace
 
@@ -55,8 +53,8 @@ void parse(const std::string& text, bool json, const std::string& name,
     opts.ignore_unknown_fields = false;
     const auto st = google::protobuf::util::JsonStringToMessage(text, &msg, opts);
     if (!st.ok()) {
-      throw DocumentError(name + ": not a valid " + msg.GetTypeName() + " in JSON: " +
-                          std::string(st.message()));
+      throw DocumentError(name + ": not a valid " + msg.GetTypeName() +
+                          " in JSON: " + std::string(st.message()));
     }
     return;
   }

@@ -38,7 +38,8 @@ class PowPair {
   PowPair(double e1, double e2) : e1_(e1), e2_(e2) {
     for (int j = 0; j < kTable; ++j) {
       const double m0 = 1.0 + j / static_cast<double>(kTable);
-      table_[static_cast<std::size_t>(j)] = Entry{{m0, 1.0 / m0}, {std::pow(m0, e1), std::pow(m0, e2)}};
+      table_[static_cast<std::size_t>(j)] =
+          Entry{{m0, 1.0 / m0}, {std::pow(m0, e1), std::pow(m0, e2)}};
     }
     p2_.resize(static_cast<std::size_t>(kMaxExp - kMinExp + 1));
     for (int k = kMinExp; k <= kMaxExp; ++k) {

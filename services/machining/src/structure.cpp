@@ -71,7 +71,8 @@ StructureModel::StructureModel(const Structure& structure, double step_s) : step
     c.pred = Pair{h11s * m.p11 + h12s * m.p21, h11s * m.p12 + h12s * m.p22};
     c.half = Pair{h11s, h12s};
     coef_.push_back(c);
-    slot_.push_back(static_cast<std::uint8_t>((m.body == Body::tool ? 0 : 2) + (m.axis == Axis::x ? 0 : 1)));
+    slot_.push_back(
+        static_cast<std::uint8_t>((m.body == Body::tool ? 0 : 2) + (m.axis == Axis::x ? 0 : 1)));
     const bool x = i < nx_;
     (x ? half_gain_x_ : half_gain_y_) += m.hg1;
     (x ? mid_gain_x_ : mid_gain_y_) += h11s * g1s + h12s * g2s;

@@ -282,8 +282,7 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
     std::vector<double> fx(static_cast<std::size_t>(m)), fy(fx.size());
     for (int k = 0; k < m; ++k) {
       angles((start_phase + k) % per_rev);
-      const detail::StepForces f =
-          engine.tooth_forces(tc, ts, 0.0, false, 0.0, 0.0, half_sweep);
+      const detail::StepForces f = engine.tooth_forces(tc, ts, 0.0, false, 0.0, 0.0, half_sweep);
       fx[static_cast<std::size_t>(k)] = f.fx_n;
       fy[static_cast<std::size_t>(k)] = f.fy_n;
     }
@@ -378,8 +377,8 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
       record_countdown = record_every;
       // Tooth 0's angle at the end of this step.
       const double a0 = sense * kTwoPi * static_cast<double>(done % per_rev) / per_rev;
-      const detail::StepForces fn = engine.forces_now(std::cos(a0), std::sin(a0), position,
-                                                      check_length, delay_steps);
+      const detail::StepForces fn =
+          engine.forces_now(std::cos(a0), std::sin(a0), position, check_length, delay_steps);
       const Displacements d = st.displacements();
       out.time_s.push_back(static_cast<double>(done) * h);
       out.fx_n.push_back(fn.fx_n);

@@ -59,18 +59,15 @@ const char* to_string(DocumentFault fault) noexcept {
 }
 
 std::string envelope_key(const smc_data_Envelope& env) { return bounded(env.key); }
-std::string envelope_document_id(const smc_data_Envelope& env) {
-  return bounded(env.document_id);
-}
+std::string envelope_document_id(const smc_data_Envelope& env) { return bounded(env.document_id); }
 
 void encode_envelope(const google::protobuf::MessageLite& msg, const Schema& schema,
-                     std::string_view key, std::string_view document_id,
-                     uint64_t sequence_number, smc_data_Envelope& out) {
+                     std::string_view key, std::string_view document_id, uint64_t sequence_number,
+                     smc_data_Envelope& out) {
   const size_t size = msg.ByteSizeLong();
   if (size > kMaxPayload) {
-    throw std::length_error("document " + std::string(document_id) + " is " +
-                            std::to_string(size) + " bytes; the envelope limit is " +
-                            std::to_string(kMaxPayload));
+    throw std::length_error("document " + std::string(document_id) + " is " + std::to_string(size) +
+                            " bytes; the envelope limit is " + std::to_string(kMaxPayload));
   }
   out = smc_data_Envelope{};
   copy_bounded(out.key, key, "key");

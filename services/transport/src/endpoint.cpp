@@ -39,10 +39,9 @@ bool poll_until(std::chrono::nanoseconds timeout, F&& get) {
 WriterBase::WriterBase(TopicBase& topic, const QosProfile& qos) {
   detail::Qos q;
   detail::apply(qos, q.get());
-  entity_ = Entity(
-      detail::check(dds_create_writer(topic.participant().publisher(), topic.handle(), q.get(),
-                                      nullptr),
-                    "dds_create_writer", topic.name()));
+  entity_ = Entity(detail::check(
+      dds_create_writer(topic.participant().publisher(), topic.handle(), q.get(), nullptr),
+      "dds_create_writer", topic.name()));
 }
 
 void WriterBase::write_raw(const void* sample) {
@@ -75,10 +74,9 @@ bool WriterBase::wait_for_readers(uint32_t n, std::chrono::nanoseconds timeout) 
 ReaderBase::ReaderBase(TopicBase& topic, const QosProfile& qos) {
   detail::Qos q;
   detail::apply(qos, q.get());
-  entity_ = Entity(
-      detail::check(dds_create_reader(topic.participant().subscriber(), topic.handle(), q.get(),
-                                      nullptr),
-                    "dds_create_reader", topic.name()));
+  entity_ = Entity(detail::check(
+      dds_create_reader(topic.participant().subscriber(), topic.handle(), q.get(), nullptr),
+      "dds_create_reader", topic.name()));
 }
 
 size_t ReaderBase::collect(const RawVisitor& visit, size_t max, bool take) {
@@ -116,8 +114,12 @@ size_t ReaderBase::collect(const RawVisitor& visit, size_t max, bool take) {
   return total;
 }
 
-size_t ReaderBase::take_raw(const RawVisitor& visit, size_t max) { return collect(visit, max, true); }
-size_t ReaderBase::read_raw(const RawVisitor& visit, size_t max) { return collect(visit, max, false); }
+size_t ReaderBase::take_raw(const RawVisitor& visit, size_t max) {
+  return collect(visit, max, true);
+}
+size_t ReaderBase::read_raw(const RawVisitor& visit, size_t max) {
+  return collect(visit, max, false);
+}
 
 MatchStatus ReaderBase::subscription_matched() const {
   dds_subscription_matched_status_t st{};
@@ -161,9 +163,9 @@ void WaitSet::attach_liveliness(const ReaderBase& reader, int64_t token) {
 void WaitSet::wait(std::chrono::nanoseconds timeout, std::vector<int64_t>& out) {
   out.clear();
   std::array<dds_attach_t, 32> xs{};
-  const auto n = detail::check(dds_waitset_wait(waitset_.handle(), xs.data(), xs.size(),
-                                                timeout.count()),
-                               "dds_waitset_wait");
+  const auto n =
+      detail::check(dds_waitset_wait(waitset_.handle(), xs.data(), xs.size(), timeout.count()),
+                    "dds_waitset_wait");
   for (dds_return_t i = 0; i < n; ++i) {
     const auto token = static_cast<int64_t>(xs[static_cast<size_t>(i)]);
     if (token == -1) {

@@ -45,7 +45,8 @@ std::string src(const std::string& rel) { return std::string(SMC_SOURCE_DIR) + "
 double secs(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
 void bench_planning(int plans) {
-  const auto dir = std::filesystem::temp_directory_path() / ("smc-bench-plan-" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("smc-bench-plan-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   auto db = store::Store::open((dir / "cell.db").string());
   store::seed_demo(db, {store::default_models_dir()});
@@ -57,7 +58,8 @@ void bench_planning(int plans) {
   const auto job = db.submit_job(spec);
   const auto part = *db.part(job.spec.part_id());
   const auto tool = *db.tool(job.spec.tool_id());
-  smc::cell::PlanInputs in{job, part, tool, db.find_models("mill-1", tool.id, part.material_id, part.id)};
+  smc::cell::PlanInputs in{job, part, tool,
+                           db.find_models("mill-1", tool.id, part.material_id, part.id)};
   const auto sel = smc::cell::select_variant(in);
   double total = 0, crit = 0;
   for (int i = 0; i < plans; ++i) {
@@ -163,7 +165,8 @@ double cpu_seconds(pid_t pid) {
 // The cell service's CPU while `n` edge processes run jobs and stream their
 // telemetry at real speed, beside its CPU over the same window with no edge.
 void bench_stream(int n, double window_s) {
-  const auto dir = std::filesystem::temp_directory_path() / ("smc-bench-stream-" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("smc-bench-stream-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string db_path = (dir / "cell.db").string();
   {
@@ -215,10 +218,10 @@ void bench_stream(int n, double window_s) {
   const double busy = cpu_seconds(cell.pid()) - busy0;
   double edges1 = 0;
   for (auto& e : edges) edges1 += cpu_seconds(e->pid());
-  std::printf("cell CPU with %d edges streaming (each a job at real speed: ~25 force summaries and "
-              "raw batches/s): %.1f %% of one core; idle: %.1f %%; one edge's own CPU: %.1f %%\n",
-              n, 100 * busy / window_s, 100 * idle / window_s,
-              100 * (edges1 - edges0) / n / window_s);
+  std::printf(
+      "cell CPU with %d edges streaming (each a job at real speed: ~25 force summaries and "
+      "raw batches/s): %.1f %% of one core; idle: %.1f %%; one edge's own CPU: %.1f %%\n",
+      n, 100 * busy / window_s, 100 * idle / window_s, 100 * (edges1 - edges0) / n / window_s);
   edges.clear();
   std::filesystem::remove_all(dir);
 }
@@ -239,9 +242,10 @@ int main(int argc, char** argv) {
   bench_planning(plans);
   const double one = deliver(1, smc::test::unique_partition("deliver1"), true);
   const double many = deliver(edges, smc::test::unique_partition("deliverN"), true);
-  std::printf("configuration delivery (checked and in force): 1 edge %.0f ms; %d edges %.0f ms "
-              "(%.1f x one edge)\n",
-              1000 * one, edges, 1000 * many, many / one);
+  std::printf(
+      "configuration delivery (checked and in force): 1 edge %.0f ms; %d edges %.0f ms "
+      "(%.1f x one edge)\n",
+      1000 * one, edges, 1000 * many, many / one);
   bench_stream(edges, window_s);
   return 0;
 }

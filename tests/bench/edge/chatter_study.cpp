@@ -31,11 +31,12 @@ int main(int argc, char** argv) {
   }
   const auto base = smc::documents::load_supervisor_config(std::string(SMC_SOURCE_DIR) +
                                                            "/edge/configs/smc2.textproto");
-  std::printf("module E: threshold %.2f on the non-harmonic share of F_z energy, %u revolutions "
-              "to confirm, band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms\n\n",
-              base.operation().chatter_threshold(), base.operation().chatter_confirm_revolutions(),
-              base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
-              base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n());
+  std::printf(
+      "module E: threshold %.2f on the non-harmonic share of F_z energy, %u revolutions "
+      "to confirm, band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms\n\n",
+      base.operation().chatter_threshold(), base.operation().chatter_confirm_revolutions(),
+      base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
+      base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n());
   std::printf("%8s %5s %8s %12s %12s %10s %10s %10s\n", "depth_mm", "seed", "stable", "cut_revs",
               "exceedances", "detected", "onset_s", "delay_ms");
   uint64_t stable_revs = 0, stable_exceed = 0, stable_false = 0;
@@ -85,22 +86,24 @@ int main(int argc, char** argv) {
                   s.chatter_onset_s(), delay_ms);
     }
   }
-  std::printf("\nstable cuts: %llu revolutions in the cut, %llu above threshold (%.2f %% per "
-              "revolution; largest statistic %.3f), %llu confirmed false detections\n",
-              static_cast<unsigned long long>(stable_revs),
-              static_cast<unsigned long long>(stable_exceed),
-              stable_revs ? 100.0 * static_cast<double>(stable_exceed) / static_cast<double>(stable_revs) : 0.0,
-              stable_max, static_cast<unsigned long long>(stable_false));
+  std::printf(
+      "\nstable cuts: %llu revolutions in the cut, %llu above threshold (%.2f %% per "
+      "revolution; largest statistic %.3f), %llu confirmed false detections\n",
+      static_cast<unsigned long long>(stable_revs), static_cast<unsigned long long>(stable_exceed),
+      stable_revs ? 100.0 * static_cast<double>(stable_exceed) / static_cast<double>(stable_revs)
+                  : 0.0,
+      stable_max, static_cast<unsigned long long>(stable_false));
   if (!delays.empty()) {
     double sum = 0, worst = 0;
     for (double d : delays) {
       sum += d;
       worst = std::max(worst, d);
     }
-    std::printf("unstable cuts: %zu detected, %d missed; delay from onset mean %.0f ms, worst "
-                "%.0f ms (one revolution = %.0f ms)\n",
-                delays.size(), missed, sum / static_cast<double>(delays.size()), worst,
-                1000 * base.operation().slow_period_s());
+    std::printf(
+        "unstable cuts: %zu detected, %d missed; delay from onset mean %.0f ms, worst "
+        "%.0f ms (one revolution = %.0f ms)\n",
+        delays.size(), missed, sum / static_cast<double>(delays.size()), worst,
+        1000 * base.operation().slow_period_s());
   }
   return 0;
 }

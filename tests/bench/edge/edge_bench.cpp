@@ -29,7 +29,8 @@ using namespace smc::edge;
 namespace {
 
 smc::config::SupervisorConfig config(const std::string& name) {
-  return smc::documents::load_supervisor_config(std::string(SMC_SOURCE_DIR) + "/edge/configs/" + name);
+  return smc::documents::load_supervisor_config(std::string(SMC_SOURCE_DIR) + "/edge/configs/" +
+                                                name);
 }
 
 // Plays a recorded sequence of drive samples in a loop; costs next to nothing.
@@ -103,9 +104,9 @@ void tick_modules(benchmark::State& state, const char* name) {
     }
   }
   // Mean time per tick as a share of the 500 us sample period.
-  state.counters["budget_pct"] = benchmark::Counter(
-      static_cast<double>(state.iterations()) * 500e-6 / 100.0,
-      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["budget_pct"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * 500e-6 / 100.0,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["worst_tick_us"] = worst_ns / 1000.0;
 }
 

@@ -45,8 +45,8 @@ Percentiles percentiles(std::vector<double> v) {
 
 Percentiles measure_wrapper(size_t samples) {
   const std::string partition = smc::test::unique_partition("bench");
-  smc::test::ChildProcess echo({smc::test::bin_path("smc-transport-echo"), "--partition",
-                                partition, "--idle-s", "30"});
+  smc::test::ChildProcess echo(
+      {smc::test::bin_path("smc-transport-echo"), "--partition", partition, "--idle-s", "30"});
   if (!echo.wait_for_line("ready")) {
     std::fprintf(stderr, "echo process did not start\n");
     std::exit(2);
@@ -98,12 +98,12 @@ Percentiles measure_wrapper(size_t samples) {
 // per-second reports of p50 and p99, doubled to full round trips.
 std::optional<Percentiles> measure_ddsperf(int seconds, int payload) {
   const std::string secs = std::to_string(seconds);
-  smc::test::ChildProcess pong({"/usr/bin/ddsperf", "-D", std::to_string(seconds + 2), "pong",
-                                "waitset"});
+  smc::test::ChildProcess pong(
+      {"/usr/bin/ddsperf", "-D", std::to_string(seconds + 2), "pong", "waitset"});
   std::string out;
   {
-    const std::string cmd = "/usr/bin/ddsperf -D " + secs + " ping size " +
-                            std::to_string(payload) + " waitset 2>&1";
+    const std::string cmd =
+        "/usr/bin/ddsperf -D " + secs + " ping size " + std::to_string(payload) + " waitset 2>&1";
     FILE* f = ::popen(cmd.c_str(), "r");
     if (f == nullptr) return std::nullopt;
     char buf[512];

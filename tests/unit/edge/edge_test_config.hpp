@@ -9,7 +9,9 @@
 
 namespace smc::edge::test {
 
-inline std::string source_path(const std::string& rel) { return std::string(SMC_SOURCE_DIR) + "/" + rel; }
+inline std::string source_path(const std::string& rel) {
+  return std::string(SMC_SOURCE_DIR) + "/" + rel;
+}
 
 inline smc::config::SupervisorConfig shipped_config(const std::string& name) {
   return smc::documents::load_supervisor_config(source_path("edge/configs/" + name));

@@ -1,13 +1,14 @@
 // Unit tests of the machining modules on their own: scripted inputs, traced
 // outputs (no simulated mill, no supervisor).
 
+#include "smc/edge/modules.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
 #include "edge_test_config.hpp"
-#include "smc/edge/modules.hpp"
 #include "smc/edge/program.hpp"
 
 using namespace smc::edge;

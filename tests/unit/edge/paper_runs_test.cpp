@@ -10,9 +10,9 @@
 
 #include "alloc_counter.hpp"
 #include "edge_test_config.hpp"
+#include "smc/documents/load.hpp"
 #include "smc/edge/core.hpp"
 #include "smc/edge/runner.hpp"
-#include "smc/documents/load.hpp"
 #include "smc/edge/sim_mill.hpp"
 #include "smc/grafcet/parser.hpp"
 #include "smc_config.pb.h"
@@ -57,11 +57,13 @@ std::unique_ptr<PaperRun> run_paper(const std::string& config, RunOptions opts =
   auto user = opts.on_tick;
   PaperRun* pr = r.get();
   opts.on_tick = [&, pr, user](const EdgeCore& c) {
-    const ModuleMask want = prescribed(*parsed.grafcet, c.situation().active_steps, c.config().modules);
+    const ModuleMask want =
+        prescribed(*parsed.grafcet, c.situation().active_steps, c.config().modules);
     if (want != c.signals().active) {
       if (pr->activity_mismatches++ == 0) {
         pr->first_mismatch = "t=" + std::to_string(c.drive_sample().force.t_s) + " active " +
-                             std::to_string(c.signals().active) + " prescribed " + std::to_string(want);
+                             std::to_string(c.signals().active) + " prescribed " +
+                             std::to_string(want);
       }
     }
     if (user) user(c);
@@ -245,7 +247,9 @@ class FaultyDrive final : public Drive {
     }
     return st;
   }
-  Status rewrite(const FixedProgram& p, int from) noexcept override { return inner_.rewrite(p, from); }
+  Status rewrite(const FixedProgram& p, int from) noexcept override {
+    return inner_.rewrite(p, from);
+  }
   double sample_period_s() const noexcept override { return inner_.sample_period_s(); }
 
  private:
@@ -278,7 +282,8 @@ void expect_fault_hold(const std::string& config, FaultCase fc) {
     }
     if (fault && hold_since < 0) hold_since = core.drive_sample().force.t_s;
     if (fault) {
-      ASSERT_EQ(core.signals().feedrate_cmd_mm_s, 0) << "feed not held at t=" << core.drive_sample().force.t_s;
+      ASSERT_EQ(core.signals().feedrate_cmd_mm_s, 0)
+          << "feed not held at t=" << core.drive_sample().force.t_s;
     }
   }
   ASSERT_TRUE(fault.has_value()) << "no fault event";
@@ -309,8 +314,8 @@ TEST(Faults, SaturatedForceSampleHoldsTheFeed) {
 
 TEST(Faults, ModuleErrorHoldsTheFeedAndNamesTheModule) {
   // Module L cannot compute its process gain at zero depth.
-  expect_fault_hold("smc1.textproto",
-                    {FaultyDrive::Kind::kZeroDepth, Fault::kModuleError, static_cast<int>(ModuleId::L)});
+  expect_fault_hold("smc1.textproto", {FaultyDrive::Kind::kZeroDepth, Fault::kModuleError,
+                                       static_cast<int>(ModuleId::L)});
 }
 
 TEST(Faults, OverrunHoldsTheFeed) {

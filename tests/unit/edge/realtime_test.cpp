@@ -2,6 +2,8 @@
 // not allocate on the loop thread, operator inputs reach it through the
 // ring, and a missed deadline holds the feed.
 
+#include "smc/edge/realtime.hpp"
+
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -11,7 +13,6 @@
 #include "alloc_counter.hpp"
 #include "edge_test_config.hpp"
 #include "smc/common/clock.hpp"
-#include "smc/edge/realtime.hpp"
 #include "smc/edge/sim_mill.hpp"
 #include "smc_config.pb.h"
 
@@ -83,14 +84,20 @@ TEST(RealTimeEdge, AMissedDeadlineHoldsTheFeed) {
   smc::VirtualClock clock;
   smc::edge::rt::RtOptions opts;
   RealTimeEdge edge(f.core, opts, clock);
-  edge.loop().run_for_ticks(100, [](void* self, const smc::edge::rt::TickInfo& info) noexcept {
-    static_cast<RealTimeEdge*>(self)->tick(info);
-  }, &edge);
+  edge.loop().run_for_ticks(
+      100,
+      [](void* self, const smc::edge::rt::TickInfo& info) noexcept {
+        static_cast<RealTimeEdge*>(self)->tick(info);
+      },
+      &edge);
   EXPECT_FALSE(f.core.fault_hold());
   edge.loop().force_overrun();
-  edge.loop().run_for_ticks(10, [](void* self, const smc::edge::rt::TickInfo& info) noexcept {
-    static_cast<RealTimeEdge*>(self)->tick(info);
-  }, &edge);
+  edge.loop().run_for_ticks(
+      10,
+      [](void* self, const smc::edge::rt::TickInfo& info) noexcept {
+        static_cast<RealTimeEdge*>(self)->tick(info);
+      },
+      &edge);
   EXPECT_TRUE(f.core.fault_hold());
   EXPECT_EQ(f.core.fault(), Fault::kOverrun);
   EXPECT_EQ(f.core.signals().feedrate_cmd_mm_s, 0);

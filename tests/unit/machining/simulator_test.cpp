@@ -164,8 +164,8 @@ TEST(Simulator, TraceHoldsEveryInternalStepsForce) {
     ASSERT_EQ(a.step(in, sa, trace), 0u);
     for (std::size_t i = 0; i < 50; ++i) {
       ASSERT_EQ(b.step(in, sb), 0u);
-      worst = std::max({worst, std::abs(fx[i] - sb.fx_n), std::abs(fy[i] - sb.fy_n),
-                        std::abs(fz[i] - sb.fz_n)});
+      worst = std::max(
+          {worst, std::abs(fx[i] - sb.fx_n), std::abs(fy[i] - sb.fy_n), std::abs(fz[i] - sb.fz_n)});
       largest = std::max(largest, std::abs(sb.fy_n));
     }
     EXPECT_EQ(fx[49], sa.fx_n);

@@ -17,9 +17,9 @@
 
 #include "smc/transport/document.hpp"
 #include "smc/transport/endpoint.hpp"
-#include "smc_config.pb.h"
 #include "smc/transport/participant.hpp"
 #include "smc/wire/topics.hpp"
+#include "smc_config.pb.h"
 
 using namespace smc::transport;
 

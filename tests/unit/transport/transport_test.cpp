@@ -6,12 +6,12 @@
 #include <zlib.h>
 
 #include <algorithm>
-#include <functional>
-#include <thread>
 #include <chrono>
 #include <cstring>
+#include <functional>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "child_process.hpp"
 #include "smc/transport/document.hpp"
@@ -201,8 +201,8 @@ class RoundTrip : public ::testing::Test {
  protected:
   void SetUp() override {
     partition_ = smc::test::unique_partition("rt");
-    echo_.emplace(std::vector<std::string>{smc::test::bin_path("smc-transport-echo"),
-                                           "--partition", partition_, "--idle-s", "60"});
+    echo_.emplace(std::vector<std::string>{smc::test::bin_path("smc-transport-echo"), "--partition",
+                                           partition_, "--idle-s", "60"});
     ASSERT_TRUE(echo_->wait_for_line("ready"));
     req_.emplace(ParticipantOptions{.partition = partition_ + ".req"});
     rep_.emplace(ParticipantOptions{.partition = partition_ + ".rep"});
@@ -246,11 +246,11 @@ class RoundTrip : public ::testing::Test {
 
 }  // namespace
 
-#define SMC_ROUND_TRIP_TEST(T)                                                   \
-  TEST_F(RoundTrip, T) {                                                         \
-    T sample{};                                                                  \
-    fill(sample);                                                                \
-    round_trip<T>(sample, [&](const T& got) { expect_same(sample, got); });      \
+#define SMC_ROUND_TRIP_TEST(T)                                              \
+  TEST_F(RoundTrip, T) {                                                    \
+    T sample{};                                                             \
+    fill(sample);                                                           \
+    round_trip<T>(sample, [&](const T& got) { expect_same(sample, got); }); \
   }
 
 SMC_ROUND_TRIP_TEST(smc_data_ForceSummary)
@@ -303,8 +303,7 @@ TEST(Configuration, LateReaderGetsLastDocumentPerKeyOnly) {
   // The reader joins after all six documents were written.
   Participant p({.partition = partition});
   Topic<smc_data_Envelope> topic(p, smc::wire::kConfigTopic);
-  DocumentReader<smc::config::SupervisorConfig> reader(topic,
-                                                       {"smc.config.SupervisorConfig", 1});
+  DocumentReader<smc::config::SupervisorConfig> reader(topic, {"smc.config.SupervisorConfig", 1});
   ASSERT_TRUE(reader.reader().wait_for_writers(1, 10s));
   std::vector<std::string> received;
   const auto deadline = std::chrono::steady_clock::now() + 10s;
@@ -388,42 +387,47 @@ class BadEnvelope : public ::testing::Test {
 TEST_F(BadEnvelope, WrongSchemaIsRejected) {
   smc::config::SupervisorConfig c;
   c.set_config_id("bad-schema");
-  publish_and_check(c, DocumentFault::kWrongSchema,
-                    [](smc_data_Envelope& e) { set_string(e.schema, "smc.config.Job"); },
-                    "smc.config.Job");
+  publish_and_check(
+      c, DocumentFault::kWrongSchema,
+      [](smc_data_Envelope& e) { set_string(e.schema, "smc.config.Job"); }, "smc.config.Job");
 }
 
 TEST_F(BadEnvelope, WrongVersionIsRejected) {
   smc::config::SupervisorConfig c;
   c.set_config_id("bad-version");
-  publish_and_check(c, DocumentFault::kWrongVersion, [](smc_data_Envelope& e) { e.version = 2; },
-                    "version 2");
+  publish_and_check(
+      c, DocumentFault::kWrongVersion, [](smc_data_Envelope& e) { e.version = 2; }, "version 2");
 }
 
 TEST_F(BadEnvelope, TruncatedPayloadIsRejected) {
   smc::config::SupervisorConfig c;
   c.set_config_id("truncated");
   c.set_grafcet_text(std::string(200, 'x'));
-  publish_and_check(c, DocumentFault::kTruncated,
-                    [](smc_data_Envelope& e) { e.payload._length -= 40; }, "declared");
+  publish_and_check(
+      c, DocumentFault::kTruncated, [](smc_data_Envelope& e) { e.payload._length -= 40; },
+      "declared");
 }
 
 TEST_F(BadEnvelope, CorruptPayloadFailsChecksum) {
   smc::config::SupervisorConfig c;
   c.set_config_id("corrupt");
   c.set_grafcet_text("grafcet y");
-  publish_and_check(c, DocumentFault::kBadChecksum,
-                    [](smc_data_Envelope& e) { e.payload._buffer[3] ^= 0x5A; }, "CRC-32");
+  publish_and_check(
+      c, DocumentFault::kBadChecksum, [](smc_data_Envelope& e) { e.payload._buffer[3] ^= 0x5A; },
+      "CRC-32");
 }
 
 TEST_F(BadEnvelope, GarbageWithValidChecksumIsUnparsable) {
   smc::config::SupervisorConfig c;
   c.set_config_id("garbage");
-  publish_and_check(c, DocumentFault::kUnparsable, [](smc_data_Envelope& e) {
-    // 0xFF bytes are an invalid tag; recompute size and CRC so only parsing fails.
-    for (uint32_t i = 0; i < e.payload._length; ++i) e.payload._buffer[i] = 0xFF;
-    e.crc32 = crc32_of(e.payload._buffer, e.payload._length);
-  }, "could not parse");
+  publish_and_check(
+      c, DocumentFault::kUnparsable,
+      [](smc_data_Envelope& e) {
+        // 0xFF bytes are an invalid tag; recompute size and CRC so only parsing fails.
+        for (uint32_t i = 0; i < e.payload._length; ++i) e.payload._buffer[i] = 0xFF;
+        e.crc32 = crc32_of(e.payload._buffer, e.payload._length);
+      },
+      "could not parse");
 }
 
 // ---- the error path names the failing call ----
@@ -466,4 +470,3 @@ TEST(ErrorPath, DeletedEntityNamesTheCall) {
   }
   EXPECT_NO_THROW(moved.write(s));
 }
-

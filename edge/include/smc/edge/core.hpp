@@ -31,10 +31,10 @@ class ChatterSuppressor;
 // Everything the core needs, validated, built off the loop.
 struct EdgeConfig {
   std::string config_id;
-  int variant = 0;                 // smc.config.SmcVariant
+  int variant = 0;  // smc.config.SmcVariant
   EdgeParameters params;
   FixedProgram program;
-  ModuleMask modules = 0;          // modules in use
+  ModuleMask modules = 0;  // modules in use
   std::string grafcet_name;
   std::string grafcet_text;
 };
@@ -46,10 +46,10 @@ EdgeConfig edge_config_from_proto(const smc::config::SupervisorConfig& cfg);
 
 enum class EventKind : uint8_t {
   kSituationChanged,
-  kChatterDetected,    // automatic (E)
-  kChatterSignalled,   // operator (D)
-  kProgramRewritten,   // F added a pass
-  kFault,              // the core put the machine in feed hold
+  kChatterDetected,   // automatic (E)
+  kChatterSignalled,  // operator (D)
+  kProgramRewritten,  // F added a pass
+  kFault,             // the core put the machine in feed hold
   kFaultCleared,
   kPassStarted,
   kPassCompleted,
@@ -61,16 +61,16 @@ struct EdgeEvent {
   EventKind kind = EventKind::kSituationChanged;
   double t_s = 0;
   Fault fault = Fault::kNone;
-  int8_t module = -1;            // ModuleId for kModuleError, else -1
+  int8_t module = -1;  // ModuleId for kModuleError, else -1
   uint64_t active_steps = 0;
   ModuleMask active = 0;
   uint32_t inputs = 0;
   int16_t pass_index = 0;
   int16_t pass_count = 0;
   double depth_mm = 0;
-  double ratio = 0;              // chatter statistic
-  double frequency_hz = 0;       // chatter frequency
-  double value = 0;              // the offending sample for a force fault
+  double ratio = 0;         // chatter statistic
+  double frequency_hz = 0;  // chatter frequency
+  double value = 0;         // the offending sample for a force fault
 };
 
 // One record per spindle revolution (module I's period).
@@ -83,12 +83,12 @@ struct RevolutionRecord {
   double feed_per_tooth_mm = 0;
   double depth_mm = 0;
   double spindle_rpm = 0;
-  double power_peak_w = 0;        // highest instantaneous spindle power in the revolution
-  double power_mean_w = 0;        // spindle power averaged over the revolution
+  double power_peak_w = 0;  // highest instantaneous spindle power in the revolution
+  double power_mean_w = 0;  // spindle power averaged over the revolution
   double x_mm = 0;
   double chatter_ratio = 0;
   double gain_estimate = 0;
-  double engagement_min = 0;       // lowest engagement during the revolution (NaN: unknown)
+  double engagement_min = 0;  // lowest engagement during the revolution (NaN: unknown)
   int16_t pass_index = 0;
   int16_t pass_count = 0;
   bool contact = false;

@@ -12,12 +12,12 @@
 namespace smc::edge {
 
 struct DriveSample {
-  ForceSample force;                 // at the end of the sample period
+  ForceSample force;  // at the end of the sample period
   double spindle_rpm = 0;
-  double depth_mm = 0;               // depth of the pass in progress
+  double depth_mm = 0;  // depth of the pass in progress
   double programmed_feedrate_mm_s = 0;
-  double feedrate_mm_s = 0;          // actually applied
-  double x_mm = 0;                   // tool position along the feed
+  double feedrate_mm_s = 0;  // actually applied
+  double x_mm = 0;           // tool position along the feed
   double spindle_power_w = 0;
   // Relative tool-part vibration in y (mm), when the drive knows it (the
   // simulated mill does; a real machine would need an extra sensor): NaN
@@ -26,8 +26,8 @@ struct DriveSample {
   // Share of the full-width engagement arc in cut (0 in air, 1 when the
   // cutter is fully in the part); NaN when the drive cannot tell.
   double engagement = __builtin_nan("");
-  int pass_index = 0;                // index into the program
-  bool in_pass = false;              // cutting a pass (not repositioning, not done)
+  int pass_index = 0;    // index into the program
+  bool in_pass = false;  // cutting a pass (not repositioning, not done)
   bool program_done = false;
 };
 

@@ -32,7 +32,10 @@ class OperatorInputMonitor final : public Module {
   OperatorInputMonitor() noexcept : Module(ModuleId::B) {}
   Period period() const noexcept override { return Period::kFast; }
   void configure(const EdgeParameters&) override {}
-  void reset() noexcept override { seen_chatter_signals_ = 0; primed_ = false; }
+  void reset() noexcept override {
+    seen_chatter_signals_ = 0;
+    primed_ = false;
+  }
   Status update(Signals& s) noexcept override;
 
  private:
@@ -104,7 +107,10 @@ class ChatterSuppressionRoutine final : public Module {
   ChatterSuppressionRoutine() noexcept : Module(ModuleId::G) {}
   Period period() const noexcept override { return Period::kFast; }
   void configure(const EdgeParameters& p) override { p_ = p; }
-  void reset() noexcept override { started_ = false; elapsed_fast_ = 0; }
+  void reset() noexcept override {
+    started_ = false;
+    elapsed_fast_ = 0;
+  }
   void clear_outputs(Signals& s) noexcept override {
     s.rewrite_requested = false;
     s.suppression_hold = false;

@@ -33,7 +33,7 @@ struct EdgeParameters {
   double fast_period_s = 0;
   double slow_period_s = 0;
   double contact_threshold_n = 0;
-  double force_reference_n = 0;       // 0: from the power limit and cutting speed
+  double force_reference_n = 0;  // 0: from the power limit and cutting speed
   double force_safety_factor = 1;
   double model_time_constant_s = 0;
   double adaptive_time_constant_s = 0;

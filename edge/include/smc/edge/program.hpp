@@ -8,8 +8,8 @@
 namespace smc::edge {
 
 struct PassSpec {
-  double depth_mm = 0;          // depth of this pass
-  double feedrate_mm_s = 0;     // programmed feedrate
+  double depth_mm = 0;       // depth of this pass
+  double feedrate_mm_s = 0;  // programmed feedrate
   double spindle_rpm = 0;
 };
 
@@ -17,7 +17,7 @@ struct FixedProgram {
   static constexpr int kMaxPasses = 16;
   std::array<PassSpec, kMaxPasses> passes{};
   uint16_t count = 0;
-  uint32_t revision = 0;        // bumped by every rewrite
+  uint32_t revision = 0;  // bumped by every rewrite
 
   double total_depth_mm() const noexcept;
   // Depth removed by passes [0, i).

@@ -23,12 +23,12 @@ struct ScheduledInput {
 };
 
 struct RunOptions {
-  double max_time_s = 600;              // stop even if the program is not done
-  std::vector<ScheduledInput> inputs;   // sorted or not; applied in time order
+  double max_time_s = 600;             // stop even if the program is not done
+  std::vector<ScheduledInput> inputs;  // sorted or not; applied in time order
   // Called after every tick (tests use it to check invariants at each step).
   std::function<void(const EdgeCore&)> on_tick;
-  bool keep_samples = true;             // keep the per-sample trace
-  int sample_decimation = 1;            // keep every n-th sample
+  bool keep_samples = true;   // keep the per-sample trace
+  int sample_decimation = 1;  // keep every n-th sample
 };
 
 // One kept sample of the trace.

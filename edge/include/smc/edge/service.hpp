@@ -27,18 +27,18 @@ namespace smc::edge {
 struct ServiceOptions {
   std::string machine_id;
   uint32_t domain_id = 0;
-  std::string partition;                     // DDS partition (tests isolate themselves)
-  std::chrono::milliseconds lease{2000};     // liveliness lease of smc_edge_status
-  int batch_decimation = 1;                  // raw force: every n-th sample
-  double speedup = 1.0;                      // machine seconds per wall second
+  std::string partition;                  // DDS partition (tests isolate themselves)
+  std::chrono::milliseconds lease{2000};  // liveliness lease of smc_edge_status
+  int batch_decimation = 1;               // raw force: every n-th sample
+  double speedup = 1.0;                   // machine seconds per wall second
   // Paced simulation instead of the real-time loop: a plain thread keeps
   // machine time at `speedup` x wall time and catches up after a delay
   // (no deadlines, so no overrun holds). Always so when speedup != 1.
   bool paced = false;
-  bool realtime = true;                      // SCHED_FIFO, mlockall when permitted
+  bool realtime = true;  // SCHED_FIFO, mlockall when permitted
   // A tick this late is an overrun, which holds the feed (real-time loop).
   std::chrono::microseconds overrun_threshold{2000};
-  std::string mill_model_file;               // the mill's own model; default: the config's
+  std::string mill_model_file;  // the mill's own model; default: the config's
   // Journal of the (job, attempt)s this edge has started, kept across
   // restarts: an assignment started by an earlier run of the process is not
   // run again but reported interrupted, so the cell re-queues it. Empty:

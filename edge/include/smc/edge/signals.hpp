@@ -11,45 +11,45 @@ namespace smc::edge {
 
 struct Signals {
   // --- written by the core before the modules run
-  ForceSample sample;               // this tick's sensor sample
-  OperatorInputs operator_inputs;   // latest operator inputs
-  ModuleMask active = 0;            // modules the operation supervisor enables
-  double spindle_rpm = 0;           // current pass
-  double depth_mm = 0;              // current pass depth
+  ForceSample sample;              // this tick's sensor sample
+  OperatorInputs operator_inputs;  // latest operator inputs
+  ModuleMask active = 0;           // modules the operation supervisor enables
+  double spindle_rpm = 0;          // current pass
+  double depth_mm = 0;             // current pass depth
   double programmed_feedrate_mm_s = 0;
-  double force_reference_n = 0;     // F_ref for the current pass
-  bool in_pass = false;             // the drive is executing a pass (not repositioning)
+  double force_reference_n = 0;  // F_ref for the current pass
+  bool in_pass = false;          // the drive is executing a pass (not repositioning)
 
   // --- B operator input monitor
-  bool feed_hold_requested = false;  // receptivity a
+  bool feed_hold_requested = false;     // receptivity a
   bool operator_chatter_event = false;  // a new chatter signal this fast period
   // --- D operator chatter detector
-  bool chatter_signalled = false;    // receptivity c (one fast period long)
+  bool chatter_signalled = false;  // receptivity c (one fast period long)
   // --- I force signal processor
-  double f_y_peak_n = 0;             // F_Y = max |F_y| over the last revolution (held when off)
-  uint32_t revolutions = 0;          // number of F_Y values produced
-  bool f_y_updated = false;          // I produced a new F_Y in this tick
+  double f_y_peak_n = 0;     // F_Y = max |F_y| over the last revolution (held when off)
+  uint32_t revolutions = 0;  // number of F_Y values produced
+  bool f_y_updated = false;  // I produced a new F_Y in this tick
   // --- J contact monitor
-  bool contact = false;              // receptivity b
+  bool contact = false;  // receptivity b
   // --- E automatic chatter detector
-  bool chatter_detected = false;     // receptivity d (latched until E is reset)
-  double chatter_ratio = 0;          // non-harmonic / total F_z energy, last revolution
-  double chatter_frequency_hz = 0;   // strongest non-harmonic component
+  bool chatter_detected = false;    // receptivity d (latched until E is reset)
+  double chatter_ratio = 0;         // non-harmonic / total F_z energy, last revolution
+  double chatter_frequency_hz = 0;  // strongest non-harmonic component
   // --- G chatter suppression routine (with F)
-  bool rewrite_requested = false;    // G asks the core to run F this tick
-  bool suppression_hold = false;     // G holds the feed
-  bool suppression_done = false;     // receptivity e
-  bool program_rewritten = false;    // F rewrote the program this tick
+  bool rewrite_requested = false;  // G asks the core to run F this tick
+  bool suppression_hold = false;   // G holds the feed
+  bool suppression_done = false;   // receptivity e
+  bool program_rewritten = false;  // F rewrote the program this tick
   // --- H parameter estimator
-  double gain_estimate = 0;          // theta = K d^beta in N / (mm/tooth)^alpha
+  double gain_estimate = 0;  // theta = K d^beta in N / (mm/tooth)^alpha
   bool gain_valid = false;
   // --- K / L force controllers
   double controller_feed_per_tooth_mm = 0;
   bool controller_valid = false;
   // --- A feedrate routine
-  double feedrate_cmd_mm_s = 0;      // what the drive is told
+  double feedrate_cmd_mm_s = 0;  // what the drive is told
   double feed_per_tooth_cmd_mm = 0;
-  bool feed_limited = false;         // a limit clamped the command this period
+  bool feed_limited = false;  // a limit clamped the command this period
 };
 
 }  // namespace smc::edge

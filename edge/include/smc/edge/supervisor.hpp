@@ -15,12 +15,12 @@ namespace smc::edge {
 
 // What the operation supervisor decided in one evaluation.
 struct Situation {
-  uint64_t active_steps = 0;   // bit i: the Grafcet's step with index i
-  ModuleMask active = 0;       // level actions: modules enabled
-  ModuleMask impulses = 0;     // impulse actions fired: modules to reset
-  uint32_t inputs = 0;         // receptivities a..e as bits 0..4
-  bool changed = false;        // the situation changed in this evaluation
-  bool error = false;          // no stable situation was reached
+  uint64_t active_steps = 0;  // bit i: the Grafcet's step with index i
+  ModuleMask active = 0;      // level actions: modules enabled
+  ModuleMask impulses = 0;    // impulse actions fired: modules to reset
+  uint32_t inputs = 0;        // receptivities a..e as bits 0..4
+  bool changed = false;       // the situation changed in this evaluation
+  bool error = false;         // no stable situation was reached
 };
 
 // State supervisor: the instantaneous operation state as receptivities.

@@ -33,17 +33,17 @@ const char* to_string(Fault f) noexcept;
 
 // One sensor sample (every sample period, 0.5 ms).
 struct ForceSample {
-  double t_s = 0;     // machine time
+  double t_s = 0;  // machine time
   double f_x_n = 0;
-  double f_y_n = 0;   // after the F_y anti-alias filter
-  double f_z_n = 0;   // after the F_z anti-alias filter
+  double f_y_n = 0;  // after the F_y anti-alias filter
+  double f_z_n = 0;  // after the F_z anti-alias filter
 };
 
 // Operator inputs as last received (module B reads them).
 struct OperatorInputs {
-  bool feed_hold = false;       // hold requested (true) or released (false)
-  uint32_t chatter_signals = 0; // count of chatter signals received so far
-  uint32_t releases = 0;        // count of feed-hold-off commands (clears a fault hold)
+  bool feed_hold = false;        // hold requested (true) or released (false)
+  uint32_t chatter_signals = 0;  // count of chatter signals received so far
+  uint32_t releases = 0;         // count of feed-hold-off commands (clears a fault hold)
 };
 
 // Receptivity inputs of the operation supervisor (paper Table 2).

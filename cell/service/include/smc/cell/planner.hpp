@@ -21,8 +21,8 @@ struct PlanInputs {
 
 struct Selection {
   smc::config::SmcVariant variant = smc::config::SMC_II;
-  std::string explanation;                   // which models were found, and why this variant
-  std::optional<store::ProcessModel> force;  // validated force-process model (SMC I)
+  std::string explanation;                     // which models were found, and why this variant
+  std::optional<store::ProcessModel> force;    // validated force-process model (SMC I)
   std::optional<store::ProcessModel> milling;  // validated milling (structural) model (SMC I)
 };
 
@@ -33,7 +33,7 @@ Selection select_variant(const PlanInputs& in);
 
 struct Plan {
   smc::config::SupervisorConfig config;  // machine fields left for dispatch
-  double critical_depth_mm = -1;         // SMC I: time-domain critical depth at the programmed speed
+  double critical_depth_mm = -1;  // SMC I: time-domain critical depth at the programmed speed
   double planning_s = 0;
 };
 

@@ -13,15 +13,15 @@ namespace smc::cell {
 
 struct ServiceOptions {
   std::string db_path;
-  std::string grafcet_dir;               // smc1.grafcet, smc2.grafcet
-  std::string defaults_file;             // cell/configs/defaults.textproto
+  std::string grafcet_dir;    // smc1.grafcet, smc2.grafcet
+  std::string defaults_file;  // cell/configs/defaults.textproto
   uint32_t domain_id = 0;
   std::string partition;
   // An edge whose status has not been alive for this long after the cell
   // starts, or whose liveliness is lost, interrupts its job.
   std::chrono::milliseconds edge_grace{6000};
-  uint32_t max_attempts = 3;             // an interrupted job is re-queued until this many attempts
-  bool learn = true;                     // fit force-process models from SMC II runs
+  uint32_t max_attempts = 3;  // an interrupted job is re-queued until this many attempts
+  bool learn = true;          // fit force-process models from SMC II runs
 };
 
 class CellService {

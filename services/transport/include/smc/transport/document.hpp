@@ -21,12 +21,12 @@ class MessageLite;
 namespace smc::transport {
 
 enum class DocumentFault : uint8_t {
-  kWrongSchema,    // envelope names another message type
-  kWrongVersion,   // schema version differs from the reader's
-  kTruncated,      // fewer payload bytes than the writer declared
-  kBadChecksum,    // CRC-32 of the payload differs
-  kUnparsable,     // Protobuf rejected the bytes
-  kInvalid,        // parsed, but the application's validation refused it
+  kWrongSchema,   // envelope names another message type
+  kWrongVersion,  // schema version differs from the reader's
+  kTruncated,     // fewer payload bytes than the writer declared
+  kBadChecksum,   // CRC-32 of the payload differs
+  kUnparsable,    // Protobuf rejected the bytes
+  kInvalid,       // parsed, but the application's validation refused it
 };
 
 const char* to_string(DocumentFault fault) noexcept;
@@ -42,15 +42,15 @@ struct DocumentError {
 };
 
 struct Schema {
-  std::string name;      // full Protobuf message name
+  std::string name;  // full Protobuf message name
   uint32_t version = 1;
 };
 
 // Fills `out` (whose payload buffer the caller must later free with
 // free_envelope) from a message. Throws std::length_error past 64 MiB.
 void encode_envelope(const google::protobuf::MessageLite& msg, const Schema& schema,
-                     std::string_view key, std::string_view document_id,
-                     uint64_t sequence_number, smc_data_Envelope& out);
+                     std::string_view key, std::string_view document_id, uint64_t sequence_number,
+                     smc_data_Envelope& out);
 void free_envelope(smc_data_Envelope& env) noexcept;
 
 // Checks schema, version, size and checksum, then parses into `out`.
@@ -122,6 +122,5 @@ class DocumentReader {
   Schema schema_;
   std::map<std::string, M> accepted_;
 };
-
 
 }  // namespace smc::transport

@@ -1,12 +1,12 @@
 #pragma once
 // Typed writers and readers. Move-only; destructors never throw.
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <optional>
 #include <vector>
-#include <chrono>
 
 #include "smc/transport/entity.hpp"
 #include "smc/transport/qos.hpp"
