@@ -8,6 +8,8 @@
 #include "smc/documents/load.hpp"
 #include "smc/machining/model_proto.hpp"
 #include "smc/machining/tds.hpp"
+#include "smc/supervision/parameters.hpp"
+#include "smc/supervision/program.hpp"
 
 namespace smc::cell {
 
@@ -100,7 +102,8 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
     *model.mutable_workpiece() = mm->workpiece();
     *mm = model;
     const auto mach = smc::machining::from_proto(model, "milling_model");
-    const double fpt = job.feedrate_mm_s() / (in.tool.teeth * rpm / 60.0);
+    const double fpt = smc::supervision::feed_per_tooth_mm(job.feedrate_mm_s(),
+                                                           static_cast<int>(in.tool.teeth), rpm);
     smc::machining::TdsSearchOptions so;
     so.initial_depth_mm = std::max(0.1, job.depth_mm() / 2);
     const auto crit = smc::machining::critical_depth_tds(mach, rpm, fpt, so);
@@ -113,10 +116,11 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
     out.critical_depth_mm = crit.bounded ? crit.critical_depth_mm : so.max_depth_mm;
     const double allowed = margin * out.critical_depth_mm;
     passes = std::max(1, static_cast<int>(std::ceil(job.depth_mm() / allowed - 1e-9)));
-    if (passes > 16) {
+    if (passes > smc::supervision::kMaxPasses) {
       throw std::runtime_error("job " + in.job.id + ": the critical depth " +
                                std::to_string(out.critical_depth_mm) + " mm would need " +
-                               std::to_string(passes) + " passes (at most 16)");
+                               std::to_string(passes) + " passes (at most " +
+                               std::to_string(smc::supervision::kMaxPasses) + ")");
     }
     std::ostringstream why;
     why << c.explanation() << " Critical depth at " << rpm << " rpm: " << out.critical_depth_mm

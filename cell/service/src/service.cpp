@@ -12,9 +12,9 @@
 #include "smc/cell/planner.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/documents/load.hpp"
-#include "smc/edge/core.hpp"
 #include "smc/machining/force_process.hpp"
 #include "smc/machining/model_proto.hpp"
+#include "smc/supervision/config.hpp"
 #include "smc/transport/document.hpp"
 #include "smc/transport/participant.hpp"
 #include "smc/wire/topics.hpp"
@@ -188,7 +188,7 @@ struct CellService::Impl {
         // Verify now: the configuration the edge will get must be valid.
         const store::Machine m =
             *db.machine(j.spec.machine_id().empty() ? mills.begin()->first : j.spec.machine_id());
-        (void)smc::edge::edge_config_from_proto(Planner::for_machine(plan.config, m, "check"));
+        (void)smc::supervision::validate(Planner::for_machine(plan.config, m, "check"));
         db.set_plan(j.id, sel.variant, plan.config.explanation(), plan.config);
         move(*db.job(j.id), cfg::JOB_PLANNED,
              std::string(store::variant_name(sel.variant)) + " planned in " +
@@ -331,17 +331,16 @@ struct CellService::Impl {
             r.set_peak_force_n(p.peak_force_n);
             r.set_cycle_time_s(static_cast<double>(p.machine_time_ns) * 1e-9);
             if (cur->plan && cur->plan->program().passes_size() > 0) {
-              // F_ref = P_max / V, as the edge computes it (no safety factor set).
+              // F_ref as the edge computes it (services/supervision).
               const auto& pl = *cur->plan;
               const auto m = db.machine(cur->machine_id);
-              const double v = 2 * 3.141592653589793 * pl.operation().cutter_radius_mm() * 1e-3 *
-                               pl.program().passes(0).spindle_rpm() / 60.0;
-              const double sf = pl.operation().force_safety_factor() > 0
-                                    ? pl.operation().force_safety_factor()
-                                    : 1;
-              const double ref = pl.operation().force_reference_n() > 0
-                                     ? pl.operation().force_reference_n()
-                                     : (m ? m->max_spindle_power_w : 0) / v / sf;
+              const double ref =
+                  pl.operation().force_reference_n() > 0
+                      ? pl.operation().force_reference_n()
+                      : smc::supervision::force_reference_n(m ? m->max_spindle_power_w : 0,
+                                                            pl.operation().cutter_radius_mm(),
+                                                            pl.program().passes(0).spindle_rpm(),
+                                                            pl.operation().force_safety_factor());
               r.set_force_reference_n(ref);
               if (ref > 0)
                 r.set_overshoot_pct(100.0 * (static_cast<double>(p.peak_force_n) - ref) / ref);

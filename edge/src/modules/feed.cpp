@@ -44,10 +44,10 @@ Status OperatorChatterDetector::update(Signals& s) noexcept {
 }
 
 Status ChatterSuppressor::update(Signals& s) noexcept {
-  if (!s.rewrite_requested) return Status::kOk;
-  s.rewrite_requested = false;
-  if (program_ == nullptr || current_pass_ == nullptr) return Status::kError;
-  if (!add_one_pass(*program_, *current_pass_)) return Status::kError;
+  if (s.rewrite_requests == served_) return Status::kOk;
+  served_ = s.rewrite_requests;
+  if (program_ == nullptr) return Status::kError;
+  if (!add_one_pass(program_->program, program_->current_pass)) return Status::kError;
   s.program_rewritten = true;
   return Status::kOk;
 }
@@ -56,7 +56,7 @@ Status ChatterSuppressionRoutine::update(Signals& s) noexcept {
   if (!started_) {
     started_ = true;
     elapsed_fast_ = 0;
-    s.rewrite_requested = true;
+    ++s.rewrite_requests;
     s.suppression_hold = true;
     s.suppression_done = false;
     return Status::kOk;

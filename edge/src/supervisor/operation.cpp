@@ -4,59 +4,28 @@
 #include "smc/edge/parameters.hpp"
 #include "smc/edge/supervisor.hpp"
 #include "smc/grafcet/engine.hpp"
-#include "smc/grafcet/parser.hpp"
-#include "smc/grafcet/verifier.hpp"
 
 namespace smc::edge {
 
 struct OperationSupervisor::Impl {
-  grafcet::Grafcet grafcet;
+  std::string name;
   grafcet::Engine engine;
   std::array<ModuleMask, grafcet::kMaxActions> action_module{};  // action index → module bit
-  std::array<int, 5> input_bit{};  // receptivity a..e → the Grafcet's input index, -1 if unused
+  std::array<int, supervision::kReceptivityCount> input_bit{};   // a..e → input index, -1 unused
 
-  explicit Impl(grafcet::Grafcet g) : grafcet(std::move(g)), engine(grafcet) {}
+  explicit Impl(const supervision::BoundGrafcet& b)
+      : name(b.grafcet.name()),
+        engine(b.grafcet),
+        action_module(b.action_module),
+        input_bit(b.input_index) {}
 };
 
+OperationSupervisor::OperationSupervisor(const supervision::BoundGrafcet& grafcet)
+    : impl_(std::make_unique<Impl>(grafcet)) {}
+
 OperationSupervisor::OperationSupervisor(std::string_view grafcet_text,
-                                         std::string_view source_name, ModuleMask allowed) {
-  grafcet::ParseResult parsed = grafcet::parse(grafcet_text, source_name);
-  if (!parsed.ok()) {
-    std::string msg = "operation supervisor: the Grafcet does not parse:";
-    for (const auto& d : parsed.errors) msg += "\n  " + d.str();
-    throw ConfigError(msg);
-  }
-  const grafcet::Report report = grafcet::verify(*parsed.grafcet);
-  if (!report.ok()) {
-    throw ConfigError("operation supervisor: the Grafcet fails verification:\n" +
-                      grafcet::format_report(*parsed.grafcet, report));
-  }
-  impl_ = std::make_unique<Impl>(std::move(*parsed.grafcet));
-  const auto& g = impl_->grafcet;
-  const std::string where(source_name);
-  for (size_t i = 0; i < g.actions().size(); ++i) {
-    const std::string& name = g.actions()[i].name;
-    if (name.size() != 1 || name[0] < 'A' || name[0] > 'L') {
-      throw ConfigError(where + ": action '" + name +
-                        "' is not a module; actions must be module letters A to L");
-    }
-    const auto id = static_cast<ModuleId>(name[0] - 'A');
-    if ((allowed & bit(id)) == 0) {
-      throw ConfigError(where + ": action '" + name + "' uses module " + name +
-                        ", which the configuration's module set does not include");
-    }
-    impl_->action_module[i] = bit(id);
-  }
-  impl_->input_bit.fill(-1);
-  for (size_t i = 0; i < g.inputs().size(); ++i) {
-    const std::string& name = g.inputs()[i].name;
-    if (name.size() != 1 || name[0] < 'a' || name[0] > 'e') {
-      throw ConfigError(where + ": input '" + name +
-                        "' is not a receptivity of the state supervisor (a, b, c, d or e)");
-    }
-    impl_->input_bit[static_cast<size_t>(name[0] - 'a')] = static_cast<int>(i);
-  }
-}
+                                         std::string_view source_name, ModuleMask allowed)
+    : OperationSupervisor(supervision::bind_grafcet(grafcet_text, source_name, allowed)) {}
 
 OperationSupervisor::~OperationSupervisor() = default;
 
@@ -96,6 +65,6 @@ int OperationSupervisor::step_number(int index) const {
 
 int OperationSupervisor::step_count() const { return static_cast<int>(impl_->engine.num_steps()); }
 
-const std::string& OperationSupervisor::name() const { return impl_->grafcet.name(); }
+const std::string& OperationSupervisor::name() const { return impl_->name; }
 
 }  // namespace smc::edge

@@ -15,8 +15,10 @@ void append_one_line(std::string& out, std::string_view s) {
 
 std::string Diagnostic::str() const {
   std::string out;
-  append_one_line(out, where.empty() ? std::string_view("<input>") : std::string_view(where));
-  out += ": ";
+  if (!where.empty()) {
+    append_one_line(out, where);
+    out += ": ";
+  }
   append_one_line(out, message);
   if (!fix.empty()) {
     out += "; fix: ";

@@ -243,18 +243,20 @@ TEST(ChatterSuppression, RewriteThenHoldThenDone) {
   ChatterSuppressor f;
   const EdgeParameters p = params();
   g.configure(p);
-  FixedProgram prog;
+  RunningProgram running;
+  FixedProgram& prog = running.program;
   prog.count = 1;
   prog.passes[0] = {2.0, 10, 1500};
-  int current = 0;
-  f.bind(&prog, &current);
+  f.attach(running);
   Signals s;
   g.update(s);
-  EXPECT_TRUE(s.rewrite_requested);
+  EXPECT_EQ(s.rewrite_requests, 1u);
+  EXPECT_TRUE(f.requested(s));
   EXPECT_TRUE(s.suppression_hold);
   EXPECT_EQ(f.update(s), Status::kOk);
   EXPECT_TRUE(s.program_rewritten);
   EXPECT_EQ(prog.count, 2);
+  EXPECT_FALSE(f.requested(s));  // each request is served once
   const int periods = static_cast<int>(std::lround(p.suppression_hold_s / p.fast_period_s));
   for (int k = 1; k < periods; ++k) {
     g.update(s);

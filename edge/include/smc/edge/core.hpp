@@ -16,9 +16,11 @@
 #include "smc/edge/module.hpp"
 #include "smc/edge/parameters.hpp"
 #include "smc/edge/program.hpp"
+#include "smc/edge/registry.hpp"
 #include "smc/edge/rt/spsc_ring.hpp"
 #include "smc/edge/signals.hpp"
 #include "smc/edge/supervisor.hpp"
+#include "smc/supervision/config.hpp"
 
 namespace smc::config {
 class SupervisorConfig;
@@ -26,23 +28,18 @@ class SupervisorConfig;
 
 namespace smc::edge {
 
-class ChatterSuppressor;
+// Everything the core needs, validated, built off the loop (the shared
+// validation of services/supervision).
+using EdgeConfig = supervision::ValidatedConfig;
 
-// Everything the core needs, validated, built off the loop.
-struct EdgeConfig {
-  std::string config_id;
-  int variant = 0;  // smc.config.SmcVariant
-  EdgeParameters params;
-  FixedProgram program;
-  ModuleMask modules = 0;  // modules in use
-  std::string grafcet_name;
-  std::string grafcet_text;
-};
-
-// Reads and checks a supervisor configuration: parameters, module set, part
-// program (depths, feeds and speeds within the machine's limits) and the
-// Grafcet (parsed and verified). Throws ConfigError naming the field.
-EdgeConfig edge_config_from_proto(const smc::config::SupervisorConfig& cfg);
+// Reads and checks a supervisor configuration for this edge: the shared
+// validation (parameters, module set, part program within the machine's
+// limits, the Grafcet parsed, bound and verified), then the edge's own
+// checks against `registry`: every configured module is one the edge has,
+// and no two configured modules declare the same output signals. Throws
+// ConfigError listing every problem.
+EdgeConfig edge_config_from_proto(const smc::config::SupervisorConfig& cfg,
+                                  const ModuleRegistry& registry = paper_modules());
 
 enum class EventKind : uint8_t {
   kSituationChanged,
@@ -110,8 +107,10 @@ struct ForceBatchRecord {
 
 class EdgeCore {
  public:
-  // Not real-time. Builds modules and supervisors from a validated config.
-  EdgeCore(EdgeConfig config, Drive& drive);
+  // Not real-time. Builds the modules of `registry` and the supervisors from
+  // a validated configuration, and the schedule from the modules'
+  // declarations in the registry's data-flow order.
+  EdgeCore(EdgeConfig config, Drive& drive, const ModuleRegistry& registry = paper_modules());
   ~EdgeCore();
   EdgeCore(const EdgeCore&) = delete;
   EdgeCore& operator=(const EdgeCore&) = delete;
@@ -125,11 +124,15 @@ class EdgeCore {
   void set_operator_inputs(const OperatorInputs& in) noexcept { pending_inputs_ = in; }
   // Raw-force decimation for ForceBatchRecord (1 = every sample).
   void set_batch_decimation(int d) noexcept { decimation_ = d < 1 ? 1 : d; }
+  // Check every module run against its declared writes: a module that
+  // changes a signal group it did not declare faults (kModuleError). For
+  // tests; costs a copy of the signals per module run.
+  void set_check_declarations(bool on) noexcept { check_declarations_ = on; }
 
   const Signals& signals() const noexcept { return s_; }
   const Situation& situation() const noexcept { return situation_; }
   const DriveSample& drive_sample() const noexcept { return drive_sample_; }
-  const FixedProgram& program() const noexcept { return program_; }
+  const FixedProgram& program() const noexcept { return running_.program; }
   const EdgeConfig& config() const noexcept { return config_; }
   const OperationSupervisor& supervisor() const noexcept { return *supervisor_; }
   Fault fault() const noexcept { return fault_; }
@@ -146,19 +149,27 @@ class EdgeCore {
   rt::SpscRing<FixedProgram, 4>& programs() noexcept { return programs_; }
 
  private:
+  // Modules in data-flow order, by when they run.
+  struct Schedule {
+    template <class T>
+    using List = std::array<T, kMaxModules>;
+    List<Module*> sample{}, revolution{}, fast{}, event{}, after_supervisor{};
+    int n_sample = 0, n_revolution = 0, n_fast = 0, n_event = 0, n_after = 0;
+  };
+
   void raise_fault(Fault f, int module, double value) noexcept;
-  void run_module(ModuleId id, bool sample_hook) noexcept;
+  void run_module(Module& m, bool sample_hook) noexcept;
   void apply_situation() noexcept;
   void emit(EventKind kind) noexcept;
   EdgeEvent make_event(EventKind kind) const noexcept;
 
   EdgeConfig config_;
   Drive& drive_;
-  std::array<std::unique_ptr<Module>, kModuleCount> modules_;
-  ChatterSuppressor* suppressor_ = nullptr;
+  std::array<std::unique_ptr<Module>, kMaxModules> modules_;  // by ModuleId
+  Schedule schedule_;
   std::unique_ptr<OperationSupervisor> supervisor_;
-  FixedProgram program_;
-  int current_pass_ = 0;
+  RunningProgram running_;
+  bool check_declarations_ = false;
   Signals s_;
   Situation situation_;
   DriveSample drive_sample_;

@@ -1,5 +1,5 @@
 #pragma once
-// The machining modules of the paper's Table 1. Each is a plain object stepped
+// The supervisory modules of the paper's Table 1. Each is a plain object stepped
 // by the edge core; see module.hpp for the real-time contract.
 
 #include <complex>
@@ -18,6 +18,8 @@ class FeedrateRoutine final : public Module {
  public:
   FeedrateRoutine() noexcept : Module(ModuleId::A) {}
   Period period() const noexcept override { return Period::kFast; }
+  SignalMask writes() const noexcept override { return mask(Signal::kFeedCommand); }
+  bool after_supervisor() const noexcept override { return true; }
   void configure(const EdgeParameters& p) override;
   void reset() noexcept override {}
   Status update(Signals& s) noexcept override;
@@ -31,6 +33,7 @@ class OperatorInputMonitor final : public Module {
  public:
   OperatorInputMonitor() noexcept : Module(ModuleId::B) {}
   Period period() const noexcept override { return Period::kFast; }
+  SignalMask writes() const noexcept override { return mask(Signal::kOperatorRequests); }
   void configure(const EdgeParameters&) override {}
   void reset() noexcept override {
     seen_chatter_signals_ = 0;
@@ -49,6 +52,7 @@ class FeedHold final : public Module {
  public:
   FeedHold() noexcept : Module(ModuleId::C) {}
   Period period() const noexcept override { return Period::kEvent; }
+  SignalMask writes() const noexcept override { return 0; }
   void configure(const EdgeParameters&) override {}
   void reset() noexcept override {}
   Status update(Signals&) noexcept override { return Status::kOk; }
@@ -59,6 +63,7 @@ class OperatorChatterDetector final : public Module {
  public:
   OperatorChatterDetector() noexcept : Module(ModuleId::D) {}
   Period period() const noexcept override { return Period::kFast; }
+  SignalMask writes() const noexcept override { return mask(Signal::kChatterSignalled); }
   void configure(const EdgeParameters&) override {}
   void reset() noexcept override {}
   void clear_outputs(Signals& s) noexcept override { s.chatter_signalled = false; }
@@ -76,6 +81,8 @@ class AutomaticChatterDetector final : public Module {
   AutomaticChatterDetector();
   ~AutomaticChatterDetector() override;
   Period period() const noexcept override { return Period::kRevolution; }
+  SignalMask writes() const noexcept override { return mask(Signal::kChatterDetected); }
+  bool takes_samples() const noexcept override { return true; }
   void configure(const EdgeParameters& p) override;
   void reset() noexcept override;
   void clear_outputs(Signals& s) noexcept override {
@@ -106,13 +113,13 @@ class ChatterSuppressionRoutine final : public Module {
  public:
   ChatterSuppressionRoutine() noexcept : Module(ModuleId::G) {}
   Period period() const noexcept override { return Period::kFast; }
+  SignalMask writes() const noexcept override { return mask(Signal::kSuppression); }
   void configure(const EdgeParameters& p) override { p_ = p; }
   void reset() noexcept override {
     started_ = false;
     elapsed_fast_ = 0;
   }
   void clear_outputs(Signals& s) noexcept override {
-    s.rewrite_requested = false;
     s.suppression_hold = false;
     s.suppression_done = false;
   }
@@ -130,6 +137,7 @@ class ParameterEstimator final : public Module {
  public:
   ParameterEstimator() noexcept : Module(ModuleId::H) {}
   Period period() const noexcept override { return Period::kRevolution; }
+  SignalMask writes() const noexcept override { return mask(Signal::kGainEstimate); }
   void configure(const EdgeParameters& p) override;
   void reset() noexcept override;
   void clear_outputs(Signals& s) noexcept override { s.gain_valid = false; }
@@ -147,6 +155,8 @@ class ForceSignalProcessor final : public Module {
  public:
   ForceSignalProcessor() noexcept : Module(ModuleId::I) {}
   Period period() const noexcept override { return Period::kRevolution; }
+  SignalMask writes() const noexcept override { return mask(Signal::kForcePeak); }
+  bool takes_samples() const noexcept override { return true; }
   void configure(const EdgeParameters&) override {}
   void reset() noexcept override { peak_ = 0; }
   Status on_sample(Signals& s) noexcept override;
@@ -161,6 +171,7 @@ class ContactMonitor final : public Module {
  public:
   ContactMonitor() noexcept : Module(ModuleId::J) {}
   Period period() const noexcept override { return Period::kRevolution; }
+  SignalMask writes() const noexcept override { return mask(Signal::kContact); }
   void configure(const EdgeParameters& p) override { threshold_ = p.contact_threshold_n; }
   void reset() noexcept override {}
   Status update(Signals& s) noexcept override;
@@ -193,6 +204,7 @@ class AdaptiveForceController final : public Module {
  public:
   AdaptiveForceController() noexcept : Module(ModuleId::K) {}
   Period period() const noexcept override { return Period::kRevolution; }
+  SignalMask writes() const noexcept override { return mask(Signal::kControllerFeed); }
   void configure(const EdgeParameters& p) override;
   void reset() noexcept override;
   void clear_outputs(Signals& s) noexcept override { s.controller_valid = false; }
@@ -210,6 +222,7 @@ class ModelBasedForceController final : public Module {
  public:
   ModelBasedForceController() noexcept : Module(ModuleId::L) {}
   Period period() const noexcept override { return Period::kRevolution; }
+  SignalMask writes() const noexcept override { return mask(Signal::kControllerFeed); }
   void configure(const EdgeParameters& p) override;
   void reset() noexcept override;
   void clear_outputs(Signals& s) noexcept override { s.controller_valid = false; }
@@ -221,28 +234,29 @@ class ModelBasedForceController final : public Module {
   bool started_ = false;
 };
 
-// F: chatter suppressor. When G asks (rewrite_requested), rewrites the
-// remaining part program to one more pass of equal depths (add_one_pass in
-// program.hpp) and reports it; the core hands the new program to the drive.
+// F: chatter suppressor. Serves each request of G (rewrite_requests) once:
+// rewrites the remaining part program to one more pass of equal depths
+// (add_one_pass in program.hpp) and reports it; the core hands the new
+// program to the drive. Reaches the program through attach().
 class ChatterSuppressor final : public Module {
  public:
   ChatterSuppressor() noexcept : Module(ModuleId::F) {}
   Period period() const noexcept override { return Period::kEvent; }
+  SignalMask writes() const noexcept override { return mask(Signal::kProgramRewritten); }
   void configure(const EdgeParameters&) override {}
+  void attach(RunningProgram& program) noexcept override { program_ = &program; }
   void reset() noexcept override {}
-  // The program the core executes and the index of the pass in progress.
-  void bind(FixedProgram* program, const int* current_pass) noexcept {
-    program_ = program;
-    current_pass_ = current_pass;
-  }
+  // Called with reset(): requests made before it are not served (never replayed).
+  void clear_outputs(Signals& s) noexcept override { served_ = s.rewrite_requests; }
+  bool requested(const Signals& s) const noexcept override { return s.rewrite_requests != served_; }
   Status update(Signals& s) noexcept override;
 
  private:
-  FixedProgram* program_ = nullptr;
-  const int* current_pass_ = nullptr;
+  RunningProgram* program_ = nullptr;
+  uint32_t served_ = 0;
 };
 
-// One of each, indexed by ModuleId.
+// One of the paper's modules A–L (the registry's factory; registry.hpp).
 std::unique_ptr<Module> make_module(ModuleId id);
 
 }  // namespace smc::edge

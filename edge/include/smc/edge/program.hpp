@@ -1,33 +1,21 @@
 #pragma once
-// A part program as the loop sees it: a fixed-size list of face-milling
-// passes, so a rewrite (module F) never allocates.
+// The part program as the loop sees it (services/supervision: one program
+// model for cell and edge), and the running program the core owns: what
+// module F rewrites and the drive executes.
 
-#include <array>
-#include <cstdint>
+#include "smc/supervision/program.hpp"
 
 namespace smc::edge {
 
-struct PassSpec {
-  double depth_mm = 0;       // depth of this pass
-  double feedrate_mm_s = 0;  // programmed feedrate
-  double spindle_rpm = 0;
+using supervision::add_one_pass;
+using supervision::FixedProgram;
+using supervision::PassSpec;
+
+// The program in execution: owned by the core, reached by a module through
+// Module::attach() (module F rewrites it). Real-time data.
+struct RunningProgram {
+  FixedProgram program;
+  int current_pass = 0;  // the pass the drive is in (or repositioning to)
 };
-
-struct FixedProgram {
-  static constexpr int kMaxPasses = 16;
-  std::array<PassSpec, kMaxPasses> passes{};
-  uint16_t count = 0;
-  uint32_t revision = 0;  // bumped by every rewrite
-
-  double total_depth_mm() const noexcept;
-  // Depth removed by passes [0, i).
-  double depth_before(int i) const noexcept;
-};
-
-// Module F (chatter suppressor): rewrite the program from pass `current`
-// on so that the depth those passes remove is taken in one more pass, all
-// of equal depth. Returns false (program unchanged) when the program is
-// full. Real-time safe.
-bool add_one_pass(FixedProgram& program, int current) noexcept;
 
 }  // namespace smc::edge

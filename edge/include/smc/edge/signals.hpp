@@ -2,12 +2,42 @@
 // The loop's shared signals ("blackboard"): every module reads what it needs
 // and writes its outputs here. Owned by the edge core, preallocated, plain
 // data; only the loop thread touches it.
+//
+// Module outputs are grouped; each group has one owner, the module that
+// declares it in Module::writes(). The core refuses a configuration in which
+// two configured modules declare the same group, and (when asked to check,
+// as the tests do) faults a module that changes a group it did not declare.
 
 #include <cstdint>
 
 #include "smc/edge/types.hpp"
 
 namespace smc::edge {
+
+// Groups of module outputs, one bit each (the fields they cover are listed
+// in Signals below).
+enum class Signal : uint32_t {
+  kOperatorRequests = 1u << 0,  // B: feed_hold_requested, operator_chatter_event
+  kChatterSignalled = 1u << 1,  // D: chatter_signalled
+  kForcePeak = 1u << 2,         // I: f_y_peak_n, revolutions, f_y_updated
+  kContact = 1u << 3,           // J: contact
+  kChatterDetected = 1u << 4,   // E: chatter_detected, chatter_ratio, chatter_frequency_hz
+  kSuppression = 1u << 5,       // G: rewrite_requests, suppression_hold, suppression_done
+  kProgramRewritten = 1u << 6,  // F: program_rewritten
+  kGainEstimate = 1u << 7,      // H: gain_estimate, gain_valid
+  kControllerFeed = 1u << 8,    // K or L: controller_feed_per_tooth_mm, controller_valid
+  kFeedCommand = 1u << 9,       // A: feedrate_cmd_mm_s, feed_per_tooth_cmd_mm, feed_limited
+};
+using SignalMask = uint32_t;
+constexpr SignalMask operator|(Signal a, Signal b) noexcept {
+  return static_cast<SignalMask>(a) | static_cast<SignalMask>(b);
+}
+constexpr SignalMask operator|(SignalMask a, Signal b) noexcept {
+  return a | static_cast<SignalMask>(b);
+}
+constexpr SignalMask mask(Signal s) noexcept { return static_cast<SignalMask>(s); }
+// "feed_command", … for messages; "" for a mask of several bits or none.
+const char* signal_name(Signal s) noexcept;
 
 struct Signals {
   // --- written by the core before the modules run
@@ -36,7 +66,7 @@ struct Signals {
   double chatter_ratio = 0;         // non-harmonic / total F_z energy, last revolution
   double chatter_frequency_hz = 0;  // strongest non-harmonic component
   // --- G chatter suppression routine (with F)
-  bool rewrite_requested = false;  // G asks the core to run F this tick
+  uint32_t rewrite_requests = 0;   // G: requests to run F so far (F serves each once)
   bool suppression_hold = false;   // G holds the feed
   bool suppression_done = false;   // receptivity e
   bool program_rewritten = false;  // F rewrote the program this tick
@@ -51,5 +81,9 @@ struct Signals {
   double feed_per_tooth_cmd_mm = 0;
   bool feed_limited = false;  // a limit clamped the command this period
 };
+
+// The output groups whose fields differ between `before` and `after`.
+// Real-time safe (compares fields; no allocation).
+SignalMask changed_signals(const Signals& before, const Signals& after) noexcept;
 
 }  // namespace smc::edge

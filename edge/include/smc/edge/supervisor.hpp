@@ -30,11 +30,14 @@ uint32_t receptivities(const Signals& s, bool fault_hold) noexcept;
 
 class OperationSupervisor {
  public:
-  // Not real-time. Parses and verifies the Grafcet; maps level actions named
-  // by module letters (A … L) to module activity and impulse actions "X*" to
-  // module resets. Any other action name, a module outside `allowed`, an
-  // input other than a–e, a parse error or a failed verification throws
-  // ConfigError naming the file position or the check.
+  // Not real-time. Runs a Grafcet already parsed, bound and verified
+  // (supervision::bind_grafcet, as a validated configuration carries it):
+  // level actions named by module letters enable modules, impulse actions
+  // "X*" reset them.
+  explicit OperationSupervisor(const supervision::BoundGrafcet& grafcet);
+  // Not real-time. Binds `grafcet_text` first: any action that is not a
+  // module in `allowed`, an input other than a–e, a parse error or a failed
+  // verification throws ConfigError naming the file position or the check.
   OperationSupervisor(std::string_view grafcet_text, std::string_view source_name,
                       ModuleMask allowed);
   ~OperationSupervisor();

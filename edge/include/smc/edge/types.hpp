@@ -4,17 +4,26 @@
 
 #include <cstdint>
 
+#include "smc/supervision/grafcet_binding.hpp"
+#include "smc/supervision/modules.hpp"
+
 namespace smc::edge {
 
-// The paper's machining modules (Table 1). Bit i of a ModuleMask is module i.
-enum class ModuleId : uint8_t { A, B, C, D, E, F, G, H, I, J, K, L };
-inline constexpr int kModuleCount = 12;
-using ModuleMask = uint16_t;
-
-constexpr ModuleMask bit(ModuleId m) noexcept {
-  return static_cast<ModuleMask>(1u << static_cast<unsigned>(m));
-}
-constexpr char letter(ModuleId m) noexcept { return static_cast<char>('A' + static_cast<int>(m)); }
+// The supervisory modules' vocabulary (A–L, masks) and the receptivities
+// a–e are shared with the cell: services/supervision.
+using supervision::bit;
+using supervision::has;
+using supervision::kInputA;
+using supervision::kInputB;
+using supervision::kInputC;
+using supervision::kInputD;
+using supervision::kInputE;
+using supervision::kMaxModules;
+using supervision::kModuleCount;
+using supervision::letter;
+using supervision::ModuleId;
+using supervision::ModuleMask;
+using supervision::Receptivity;
 
 // Result of a real-time call: never an exception on the loop.
 enum class Status : uint8_t { kOk, kError };
@@ -44,15 +53,6 @@ struct OperatorInputs {
   bool feed_hold = false;        // hold requested (true) or released (false)
   uint32_t chatter_signals = 0;  // count of chatter signals received so far
   uint32_t releases = 0;         // count of feed-hold-off commands (clears a fault hold)
-};
-
-// Receptivity inputs of the operation supervisor (paper Table 2).
-enum Receptivity : uint8_t {
-  kInputA = 0,  // a: operator feed hold active
-  kInputB = 1,  // b: tool-part contact
-  kInputC = 2,  // c: chatter signalled by the operator
-  kInputD = 3,  // d: chatter detected automatically
-  kInputE = 4,  // e: chatter suppression routine complete
 };
 
 }  // namespace smc::edge

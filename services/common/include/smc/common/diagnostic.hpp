@@ -26,7 +26,8 @@ struct Diagnostic {
   std::string fix;
 
   // "where: message; fix: fix" on one line (newlines in the parts become
-  // spaces, so a diagnostic is always one line).
+  // spaces, so a diagnostic is always one line); "message; fix: fix" when
+  // `where` is empty (the message names its place itself).
   std::string str() const;
 };
 

@@ -3,16 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "smc/edge/modules.hpp"
-
 namespace smc::edge {
 
 namespace {
-
-constexpr ModuleId kSampleModules[] = {ModuleId::I, ModuleId::E};
-constexpr ModuleId kRevolutionModules[] = {ModuleId::I, ModuleId::J, ModuleId::E,
-                                           ModuleId::H, ModuleId::K, ModuleId::L};
-constexpr ModuleId kFastModules[] = {ModuleId::B, ModuleId::D, ModuleId::G};
 
 bool is_active(ModuleMask mask, ModuleId id) noexcept { return (mask & bit(id)) != 0; }
 
@@ -62,28 +55,58 @@ const char* to_string(EventKind k) noexcept {
   return "unknown";
 }
 
-EdgeCore::EdgeCore(EdgeConfig config, Drive& drive)
-    : config_(std::move(config)), drive_(drive), program_(config_.program) {
-  for (int i = 0; i < kModuleCount; ++i) {
-    const auto id = static_cast<ModuleId>(i);
-    modules_[static_cast<size_t>(i)] = make_module(id);
-    if ((config_.modules & bit(id)) != 0)
-      modules_[static_cast<size_t>(i)]->configure(config_.params);
+EdgeCore::EdgeCore(EdgeConfig config, Drive& drive, const ModuleRegistry& registry)
+    : config_(std::move(config)), drive_(drive) {
+  running_.program = config_.program;
+  // Every module of the registry is built (an unconfigured one never runs);
+  // the schedule follows the registry's data-flow order and each module's
+  // declarations.
+  auto add = [](auto& list, int& n, Module* m) { list[static_cast<size_t>(n++)] = m; };
+  for (const ModuleEntry& e : registry) {
+    auto& slot = modules_[static_cast<size_t>(e.id)];
+    slot = e.make();
+    Module* m = slot.get();
+    if (is_active(config_.modules, e.id)) m->configure(config_.params);
+    m->attach(running_);
+    if (m->takes_samples()) add(schedule_.sample, schedule_.n_sample, m);
+    if (m->after_supervisor()) {
+      add(schedule_.after_supervisor, schedule_.n_after, m);
+      continue;
+    }
+    switch (m->period()) {
+      case Period::kRevolution:
+        add(schedule_.revolution, schedule_.n_revolution, m);
+        break;
+      case Period::kFast:
+        add(schedule_.fast, schedule_.n_fast, m);
+        break;
+      case Period::kEvent:
+        add(schedule_.event, schedule_.n_event, m);
+        break;
+    }
   }
-  suppressor_ = static_cast<ChatterSuppressor*>(modules_[static_cast<size_t>(ModuleId::F)].get());
-  suppressor_->bind(&program_, &current_pass_);
-  supervisor_ = std::make_unique<OperationSupervisor>(config_.grafcet_text, config_.grafcet_name,
-                                                      config_.modules);
+  for (int i = 0; i < kMaxModules; ++i) {
+    if (is_active(config_.modules, static_cast<ModuleId>(i)) && !modules_[static_cast<size_t>(i)]) {
+      throw ConfigError(common::Diagnostic{
+          "supervisor_config.modules",
+          std::string("module ") + letter(static_cast<ModuleId>(i)) + " is not one this edge has",
+          "use the modules of the edge's registry"});
+    }
+  }
+  supervisor_ = config_.grafcet ? std::make_unique<OperationSupervisor>(*config_.grafcet)
+                                : std::make_unique<OperationSupervisor>(
+                                      config_.grafcet_text, config_.grafcet_name, config_.modules);
 }
 
 EdgeCore::~EdgeCore() = default;
 
 void EdgeCore::start() {
-  program_ = config_.program;
-  current_pass_ = 0;
-  drive_.load(program_);
+  running_.program = config_.program;
+  running_.current_pass = 0;
+  drive_.load(running_.program);
   s_ = Signals{};
   for (auto& m : modules_) {
+    if (!m) continue;
     m->reset();
     m->clear_outputs(s_);
   }
@@ -112,7 +135,7 @@ EdgeEvent EdgeCore::make_event(EventKind kind) const noexcept {
   e.active = s_.active;
   e.inputs = situation_.inputs;
   e.pass_index = static_cast<int16_t>(drive_sample_.pass_index);
-  e.pass_count = static_cast<int16_t>(program_.count);
+  e.pass_count = static_cast<int16_t>(running_.program.count);
   e.depth_mm = drive_sample_.depth_mm;
   return e;
 }
@@ -131,10 +154,17 @@ void EdgeCore::raise_fault(Fault f, int module, double value) noexcept {
   events_.try_push(e);
 }
 
-void EdgeCore::run_module(ModuleId id, bool sample_hook) noexcept {
-  Module& m = *modules_[static_cast<size_t>(id)];
+void EdgeCore::run_module(Module& m, bool sample_hook) noexcept {
+  const int id = static_cast<int>(m.id());
+  if (!check_declarations_) {
+    const Status st = sample_hook ? m.on_sample(s_) : m.update(s_);
+    if (st != Status::kOk) raise_fault(Fault::kModuleError, id, 0);
+    return;
+  }
+  const Signals before = s_;
   const Status st = sample_hook ? m.on_sample(s_) : m.update(s_);
-  if (st != Status::kOk) raise_fault(Fault::kModuleError, static_cast<int>(id), 0);
+  const SignalMask undeclared = changed_signals(before, s_) & ~m.writes();
+  if (st != Status::kOk || undeclared != 0) raise_fault(Fault::kModuleError, id, undeclared);
 }
 
 void EdgeCore::apply_situation() noexcept {
@@ -143,10 +173,11 @@ void EdgeCore::apply_situation() noexcept {
   // Impulse actions reset modules; a routine that becomes active starts afresh.
   ModuleMask resets = static_cast<ModuleMask>(situation_.impulses & config_.modules);
   resets = static_cast<ModuleMask>(resets | (after & ~before & bit(ModuleId::G)));
-  for (int i = 0; i < kModuleCount; ++i) {
-    if ((resets & (1u << i)) == 0) continue;
-    modules_[static_cast<size_t>(i)]->reset();
-    modules_[static_cast<size_t>(i)]->clear_outputs(s_);
+  for (int i = 0; i < kMaxModules; ++i) {
+    Module* m = modules_[static_cast<size_t>(i)].get();
+    if ((resets & (1u << i)) == 0 || m == nullptr) continue;
+    m->reset();
+    m->clear_outputs(s_);
   }
   s_.active = after;
 }
@@ -162,7 +193,7 @@ void EdgeCore::tick(bool overrun) noexcept {
   if (drive_.step(s_.feedrate_cmd_mm_s, drive_sample_) != Status::kOk) {
     raise_fault(Fault::kDriveError, -1, 0);
   }
-  current_pass_ = drive_sample_.pass_index;
+  running_.current_pass = drive_sample_.pass_index;
   s_.spindle_rpm = drive_sample_.spindle_rpm;
   s_.depth_mm = drive_sample_.depth_mm;
   s_.programmed_feedrate_mm_s = drive_sample_.programmed_feedrate_mm_s;
@@ -188,8 +219,9 @@ void EdgeCore::tick(bool overrun) noexcept {
   if (overrun) raise_fault(Fault::kOverrun, -1, 0);
   if (sample_ok) {
     s_.sample = f;
-    for (ModuleId id : kSampleModules) {
-      if (is_active(s_.active, id)) run_module(id, true);
+    for (int i = 0; i < schedule_.n_sample; ++i) {
+      Module& m = *schedule_.sample[static_cast<size_t>(i)];
+      if (is_active(s_.active, m.id())) run_module(m, true);
     }
     if (ticks_ % static_cast<uint64_t>(decimation_) == 0 && batch_.count < ForceBatchRecord::kMax) {
       if (batch_.count == 0) {
@@ -206,26 +238,30 @@ void EdgeCore::tick(bool overrun) noexcept {
   const bool fast = ticks_ % static_cast<uint64_t>(p.samples_per_fast) == 0;
   const bool chatter_before = s_.chatter_detected;
 
-  // 3. Revolution-rate modules, in data-flow order: I → J → E → H → K/L.
+  // 3. Revolution-rate modules, in data-flow order (paper: I, J, E, H, K, L).
   if (revolution) {
-    for (ModuleId id : kRevolutionModules) {
-      if (is_active(s_.active, id)) run_module(id, false);
+    for (int i = 0; i < schedule_.n_revolution; ++i) {
+      Module& m = *schedule_.revolution[static_cast<size_t>(i)];
+      if (is_active(s_.active, m.id())) run_module(m, false);
     }
   }
-  // 4. Fast modules: B, D, G; F when G asks for it.
+  // 4. Fast modules (B, D, G), then the configured event modules another
+  // module asked for (F, when G asks).
   if (fast) {
-    for (ModuleId id : kFastModules) {
-      if (is_active(s_.active, id)) run_module(id, false);
+    for (int i = 0; i < schedule_.n_fast; ++i) {
+      Module& m = *schedule_.fast[static_cast<size_t>(i)];
+      if (is_active(s_.active, m.id())) run_module(m, false);
     }
-    if (s_.rewrite_requested) {
-      run_module(ModuleId::F, false);
-      if (s_.program_rewritten) {
-        if (drive_.rewrite(program_, current_pass_) != Status::kOk) {
-          raise_fault(Fault::kDriveError, -1, 0);
-        }
-        programs_.try_push(program_);
-        emit(EventKind::kProgramRewritten);
+    for (int i = 0; i < schedule_.n_event; ++i) {
+      Module& m = *schedule_.event[static_cast<size_t>(i)];
+      if (is_active(config_.modules, m.id()) && m.requested(s_)) run_module(m, false);
+    }
+    if (s_.program_rewritten) {
+      if (drive_.rewrite(running_.program, running_.current_pass) != Status::kOk) {
+        raise_fault(Fault::kDriveError, -1, 0);
       }
+      programs_.try_push(running_.program);
+      emit(EventKind::kProgramRewritten);
     }
   }
 
@@ -235,8 +271,13 @@ void EdgeCore::tick(bool overrun) noexcept {
   if (situation_.error) raise_fault(Fault::kSupervisorError, -1, 0);
   apply_situation();
 
-  // 6. The feedrate routine, after the supervisor so a hold acts at once.
-  if (fast && is_active(s_.active, ModuleId::A)) run_module(ModuleId::A, false);
+  // 6. Modules that act on this tick's decision (A, so a hold acts at once).
+  if (fast) {
+    for (int i = 0; i < schedule_.n_after; ++i) {
+      Module& m = *schedule_.after_supervisor[static_cast<size_t>(i)];
+      if (is_active(s_.active, m.id())) run_module(m, false);
+    }
+  }
   if (fault_hold_) {
     s_.feedrate_cmd_mm_s = 0;
     s_.feed_per_tooth_cmd_mm = 0;
@@ -290,7 +331,7 @@ void EdgeCore::tick(bool overrun) noexcept {
     r.gain_estimate = s_.gain_estimate;
     r.engagement_min = engagement_min_;
     r.pass_index = static_cast<int16_t>(drive_sample_.pass_index);
-    r.pass_count = static_cast<int16_t>(program_.count);
+    r.pass_count = static_cast<int16_t>(running_.program.count);
     r.contact = s_.contact;
     r.chatter = s_.chatter_detected;
     r.fault_hold = fault_hold_;

@@ -1,8 +1,8 @@
-#include "smc/edge/program.hpp"
+#include "smc/supervision/program.hpp"
 
 #include <cmath>
 
-namespace smc::edge {
+namespace smc::supervision {
 
 double FixedProgram::total_depth_mm() const noexcept { return depth_before(count); }
 
@@ -35,4 +35,4 @@ bool add_one_pass(FixedProgram& program, int current) noexcept {
   return true;
 }
 
-}  // namespace smc::edge
+}  // namespace smc::supervision

@@ -1,4 +1,4 @@
-#include "smc/edge/parameters.hpp"
+#include "smc/supervision/parameters.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -6,29 +6,51 @@
 
 #include "smc_config.pb.h"
 
-namespace smc::edge {
+namespace smc::supervision {
 
-double EdgeParameters::force_reference_at(double spindle_rpm) const noexcept {
-  if (force_reference_n > 0) return force_reference_n;
-  const double v_m_s = 2.0 * std::numbers::pi * cutter_radius_mm * 1e-3 * spindle_rpm / 60.0;
-  if (v_m_s <= 0) return 0;
-  return max_spindle_power_w / v_m_s / force_safety_factor;
+double cutting_speed_m_s(double cutter_radius_mm, double spindle_rpm) noexcept {
+  return 2.0 * std::numbers::pi * cutter_radius_mm * 1e-3 * spindle_rpm / 60.0;
 }
 
-double EdgeParameters::feedrate_for(double feed_per_tooth_mm, double spindle_rpm) const noexcept {
+double force_reference_n(double max_power_w, double cutter_radius_mm, double spindle_rpm,
+                         double safety_factor) noexcept {
+  const double v_m_s = cutting_speed_m_s(cutter_radius_mm, spindle_rpm);
+  if (!(v_m_s > 0)) return 0;
+  return max_power_w / v_m_s / (safety_factor > 0 ? safety_factor : 1.0);
+}
+
+double feedrate_mm_s(double feed_per_tooth_mm, int teeth, double spindle_rpm) noexcept {
   return feed_per_tooth_mm * teeth * spindle_rpm / 60.0;
 }
 
-double EdgeParameters::feed_per_tooth_for(double feedrate_mm_s, double spindle_rpm) const noexcept {
-  const double rev_s = teeth * spindle_rpm / 60.0;
-  return rev_s > 0 ? feedrate_mm_s / rev_s : 0.0;
+double feed_per_tooth_mm(double feedrate_mm_s, int teeth, double spindle_rpm) noexcept {
+  const double teeth_per_s = teeth * spindle_rpm / 60.0;
+  return teeth_per_s > 0 ? feedrate_mm_s / teeth_per_s : 0.0;
+}
+
+double Parameters::force_reference_at(double spindle_rpm) const noexcept {
+  if (force_reference_n > 0) return force_reference_n;
+  return supervision::force_reference_n(max_spindle_power_w, cutter_radius_mm, spindle_rpm,
+                                        force_safety_factor);
+}
+
+double Parameters::feedrate_for(double feed_per_tooth_mm, double spindle_rpm) const noexcept {
+  return feedrate_mm_s(feed_per_tooth_mm, teeth, spindle_rpm);
+}
+
+double Parameters::feed_per_tooth_for(double feedrate_mm_s, double spindle_rpm) const noexcept {
+  return feed_per_tooth_mm(feedrate_mm_s, teeth, spindle_rpm);
 }
 
 namespace {
 
+// Records a problem and goes on, so one pass reports every bad field. A
+// bound that is itself bad (NaN after an earlier problem) skips the check:
+// its own problem is already on the list.
 class Checker {
  public:
-  explicit Checker(std::string prefix) : prefix_(std::move(prefix)) {}
+  Checker(std::string prefix, common::Diagnostics& problems)
+      : prefix_(std::move(prefix)), problems_(problems) {}
 
   double positive(const char* field, double v, const char* fix) const {
     if (!(v > 0) || !std::isfinite(v)) fail(field, "must be > 0", v, fix);
@@ -39,6 +61,7 @@ class Checker {
     return v;
   }
   double in_range(const char* field, double v, double lo, double hi, const char* fix) const {
+    if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi) return v;
     if (!(v >= lo && v <= hi)) {
       std::ostringstream why;
       why << "must be in [" << lo << ", " << hi << "]";
@@ -46,22 +69,21 @@ class Checker {
     }
     return v;
   }
-  [[noreturn]] void fail(const char* field, const std::string& why, double v,
-                         const char* fix) const {
-    std::ostringstream msg;
-    msg << prefix_ << field << ": " << why << " (got " << v << "); " << fix;
-    throw ConfigError(msg.str());
+  void fail(const char* field, const std::string& why, double v, const char* fix) const {
+    problems_.add(prefix_ + field, why + " (got " + common::number(v) + ")", fix);
   }
 
  private:
   std::string prefix_;
+  common::Diagnostics& problems_;
 };
 
 }  // namespace
 
-EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) {
-  EdgeParameters p;
-  const Checker m("supervisor_config.machine.");
+Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
+                           common::Diagnostics& problems) {
+  Parameters p;
+  const Checker m("supervisor_config.machine.", problems);
   const auto& mc = cfg.machine();
   p.max_spindle_power_w = m.positive("max_spindle_power_w", mc.max_spindle_power_w(),
                                      "set the spindle's rated power, e.g. 745.7");
@@ -70,7 +92,7 @@ EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) 
   p.max_spindle_rpm = m.positive("max_spindle_rpm", mc.max_spindle_rpm(),
                                  "set the spindle's maximum speed, e.g. 3000");
 
-  const Checker o("supervisor_config.operation.");
+  const Checker o("supervisor_config.operation.", problems);
   const auto& op = cfg.operation();
   p.max_feed_per_tooth_mm = o.positive("max_feed_per_tooth_mm", op.max_feed_per_tooth_mm(),
                                        "set the handbook limit, e.g. 0.6");
@@ -82,9 +104,11 @@ EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) 
       o.positive("cutter_radius_mm", op.cutter_radius_mm(), "set the cutter radius, e.g. 25");
   p.sample_period_s = o.in_range("sample_period_s", op.sample_period_s(), 1e-5, 0.01,
                                  "set the force sampling period, e.g. 0.0005");
-  p.fast_period_s = o.in_range("fast_period_s", op.fast_period_s(), p.sample_period_s, 1.0,
+  const bool sample_ok = p.sample_period_s >= 1e-5 && p.sample_period_s <= 0.01;
+  const double sample_bound = sample_ok ? p.sample_period_s : std::nan("");
+  p.fast_period_s = o.in_range("fast_period_s", op.fast_period_s(), sample_bound, 1.0,
                                "set modules A and B's period, e.g. 0.01");
-  p.slow_period_s = o.in_range("slow_period_s", op.slow_period_s(), p.sample_period_s, 2.0,
+  p.slow_period_s = o.in_range("slow_period_s", op.slow_period_s(), sample_bound, 2.0,
                                "set one spindle revolution, e.g. 0.04 at 1500 rpm");
   p.contact_threshold_n = o.positive("contact_threshold_n", op.contact_threshold_n(),
                                      "set the contact threshold on F_Y, e.g. 50");
@@ -111,7 +135,7 @@ EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) 
                                          "set the chatter search band, e.g. 150");
   p.chatter_band_high_hz =
       o.in_range("chatter_band_high_hz", op.chatter_band_high_hz(), p.chatter_band_low_hz,
-                 0.5 / p.sample_period_s, "keep the band below the Nyquist frequency");
+                 0.5 / sample_bound, "keep the band below the Nyquist frequency");
   p.harmonic_guard_hz = o.non_negative("harmonic_guard_hz", op.harmonic_guard_hz(),
                                        "set the band ignored around tooth harmonics, e.g. 15");
   p.chatter_min_rms_n = o.non_negative("chatter_min_rms_n", op.chatter_min_rms_n(),
@@ -124,7 +148,7 @@ EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) 
   const auto& fm = cfg.force_model();
   p.has_force_model = fm.k_kn() > 0 && fm.alpha() > 0 && fm.beta() > 0;
   if (cfg.has_force_model() && !p.has_force_model) {
-    const Checker f("supervisor_config.force_model.");
+    const Checker f("supervisor_config.force_model.", problems);
     f.positive("k_kn", fm.k_kn(), "give K of F_Y = K d^beta f^alpha in kN, e.g. 0.76");
     f.positive("beta", fm.beta(), "give the depth exponent, e.g. 0.65");
     f.positive("alpha", fm.alpha(), "give the feed exponent, e.g. 0.63");
@@ -133,12 +157,15 @@ EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) 
   p.model_beta = fm.beta();
   p.model_alpha = fm.alpha();
 
+  if (!sample_ok) return p;  // the derived counts need a sample period
   auto samples = [&](double period, const char* field) {
+    if (!(period > 0) || !std::isfinite(period)) return 0;  // reported above
     const double n = period / p.sample_period_s;
     const double r = std::round(n);
-    if (std::fabs(n - r) > 1e-6 * n) {
+    if (!(std::fabs(n - r) <= 1e-6 * n)) {
       o.fail(field, "must be a whole number of sample periods", period,
              "make it a multiple of sample_period_s");
+      return 0;
     }
     return static_cast<int>(r);
   };
@@ -148,4 +175,11 @@ EdgeParameters parameters_from_config(const smc::config::SupervisorConfig& cfg) 
   return p;
 }
 
-}  // namespace smc::edge
+Parameters parameters_from_config(const smc::config::SupervisorConfig& cfg) {
+  common::Diagnostics problems;
+  Parameters p = read_parameters(cfg, problems);
+  if (!problems.ok()) throw ConfigError(std::move(problems));
+  return p;
+}
+
+}  // namespace smc::supervision

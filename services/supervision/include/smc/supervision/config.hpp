@@ -1,0 +1,47 @@
+#pragma once
+// Validation of a supervisor configuration (smc.config.SupervisorConfig):
+// parameters, module set, part program within the machine's limits, and the
+// operation supervisor's Grafcet (bound to the modules and receptivities,
+// then verified). Cell and edge call the same function: the cell before it
+// sends a configuration, the edge before it accepts one. Not real-time.
+
+#include <memory>
+#include <string>
+
+#include "smc/supervision/grafcet_binding.hpp"
+#include "smc/supervision/modules.hpp"
+#include "smc/supervision/parameters.hpp"
+#include "smc/supervision/program.hpp"
+
+namespace smc::config {
+class SupervisorConfig;
+}
+
+namespace smc::supervision {
+
+// Everything the edge's core needs, checked.
+struct ValidatedConfig {
+  std::string config_id;
+  int variant = 0;  // smc.config.SmcVariant
+  Parameters params;
+  FixedProgram program;
+  ModuleMask modules = 0;  // modules in use
+  std::string grafcet_name;
+  std::string grafcet_text;
+  // The Grafcet, parsed, bound and verified (shared: copies of a validated
+  // configuration never parse or verify again).
+  std::shared_ptr<const BoundGrafcet> grafcet;
+};
+
+// The paper's modules, A–L.
+inline constexpr ModuleMask kPaperModules = (1u << kModuleCount) - 1;
+
+// Reads and checks the whole configuration, collecting every problem.
+// Throws ConfigError listing them (field paths under "supervisor_config.",
+// Grafcet problems as "file:line:col"). `known`: the modules a
+// configuration may name (an edge passes the modules it has). The Grafcet
+// is verified only when everything else is right.
+ValidatedConfig validate(const smc::config::SupervisorConfig& cfg,
+                         ModuleMask known = kPaperModules);
+
+}  // namespace smc::supervision

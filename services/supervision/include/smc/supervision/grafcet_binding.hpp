@@ -1,0 +1,44 @@
+#pragma once
+// The operation supervisor's Grafcet bound to the edge's vocabulary: its
+// level and impulse actions name modules (A, B, … ; "X*" resets X), its
+// inputs are the state supervisor's receptivities a–e (paper, Table 2).
+// Checked cheaply first (names, sizes), then verified exhaustively. Used by
+// the edge's operation supervisor and by configuration validation in cell
+// and edge alike. Not for the real-time loop (allocates).
+
+#include <array>
+#include <string_view>
+
+#include "smc/grafcet/model.hpp"
+#include "smc/grafcet/types.hpp"
+#include "smc/supervision/modules.hpp"
+#include "smc/supervision/parameters.hpp"
+
+namespace smc::supervision {
+
+// Receptivities of the state supervisor (paper, Table 2), as input bits.
+enum Receptivity : uint8_t {
+  kInputA = 0,  // a: operator feed hold active
+  kInputB = 1,  // b: tool-part contact
+  kInputC = 2,  // c: chatter signalled by the operator
+  kInputD = 3,  // d: chatter detected automatically
+  kInputE = 4,  // e: chatter suppression routine complete
+};
+inline constexpr int kReceptivityCount = 5;
+
+struct BoundGrafcet {
+  grafcet::Grafcet grafcet;
+  // Grafcet action index → the module's bit.
+  std::array<ModuleMask, grafcet::kMaxActions> action_module{};
+  // Receptivity a..e → the Grafcet's input index; -1 when the Grafcet does
+  // not read it.
+  std::array<int, kReceptivityCount> input_index{};
+};
+
+// Parses `text` (named `source_name` in messages), checks that every action
+// is a module in `allowed` and every input a receptivity a–e, then verifies
+// it. Throws ConfigError: parse errors as "file:line:col: …", a bad action
+// or input naming it, a failed verification with the verifier's report.
+BoundGrafcet bind_grafcet(std::string_view text, std::string_view source_name, ModuleMask allowed);
+
+}  // namespace smc::supervision

@@ -1,0 +1,92 @@
+#pragma once
+// The fixed machine and operation parameter modules (paper, design step 2)
+// as the edge's modules read them, read and checked from a
+// smc.config.SupervisorConfig off the loop; and the conversions between
+// power, force, feed and speed that cell and edge must agree on.
+
+#include <string>
+
+#include "smc/common/diagnostic.hpp"
+
+namespace smc::config {
+class SupervisorConfig;
+}
+
+namespace smc::supervision {
+
+// A configuration that cannot be used. what() lists every problem, one per
+// line, as "supervisor_config.<field path>: what is wrong; fix: what to do",
+// e.g. "supervisor_config.operation.sample_period_s: must be > 0 (got 0);
+// fix: set the force sampling period, e.g. 0.0005".
+struct ConfigError : common::DiagnosticError {
+  using common::DiagnosticError::DiagnosticError;
+  // One problem whose text names its own place.
+  explicit ConfigError(const std::string& message)
+      : common::DiagnosticError(common::Diagnostic{"", message, ""}) {}
+};
+
+// Cutting speed at the cutter's periphery, m/s.
+double cutting_speed_m_s(double cutter_radius_mm, double spindle_rpm) noexcept;
+// F_ref = P_max / V / safety (the paper's reference force), N; 0 when V is 0.
+double force_reference_n(double max_power_w, double cutter_radius_mm, double spindle_rpm,
+                         double safety_factor = 1) noexcept;
+// Feedrate (mm/s) for a feed per tooth at a spindle speed, and back.
+double feedrate_mm_s(double feed_per_tooth_mm, int teeth, double spindle_rpm) noexcept;
+double feed_per_tooth_mm(double feedrate_mm_s, int teeth, double spindle_rpm) noexcept;
+
+struct Parameters {
+  // Fixed machine parameters.
+  double max_spindle_power_w = 0;
+  double max_feedrate_mm_s = 0;
+  double max_spindle_rpm = 0;
+  // Fixed operation parameters.
+  double max_feed_per_tooth_mm = 0;
+  double min_feed_per_tooth_mm = 0;
+  int teeth = 0;
+  double cutter_radius_mm = 0;
+  double sample_period_s = 0;
+  double fast_period_s = 0;
+  double slow_period_s = 0;
+  double contact_threshold_n = 0;
+  double force_reference_n = 0;  // 0: from the power limit and cutting speed
+  double force_safety_factor = 1;
+  double model_time_constant_s = 0;
+  double adaptive_time_constant_s = 0;
+  double rls_forgetting = 1;
+  double adaptive_feed_exponent = 0;
+  double chatter_threshold = 0;
+  int chatter_confirm_revolutions = 1;
+  double chatter_band_low_hz = 0;
+  double chatter_band_high_hz = 0;
+  double harmonic_guard_hz = 0;
+  double chatter_min_rms_n = 0;
+  double suppression_hold_s = 0;
+  double force_sensor_range_n = 0;
+  // Force-process model (eq. 1) for module L: F_Y[kN] = K d^beta f^alpha.
+  bool has_force_model = false;
+  double model_k_kn = 0;
+  double model_beta = 0;
+  double model_alpha = 0;
+
+  // Derived, in samples.
+  int samples_per_fast = 0;
+  int samples_per_revolution = 0;
+  int samples_per_hold = 0;
+
+  // F_ref at a spindle speed: the configured reference when one is given,
+  // else force_reference_n(P_max, R, rpm, safety). Real-time safe.
+  double force_reference_at(double spindle_rpm) const noexcept;
+  // Feedrate (mm/s) for a feed per tooth at a spindle speed, and back.
+  // Real-time safe.
+  double feedrate_for(double feed_per_tooth_mm, double spindle_rpm) const noexcept;
+  double feed_per_tooth_for(double feedrate_mm_s, double spindle_rpm) const noexcept;
+};
+
+// Reads and checks every field the modules use, collecting every problem in
+// `problems` (field paths under "supervisor_config."). The result is only
+// meaningful when no problem was added.
+Parameters read_parameters(const smc::config::SupervisorConfig& cfg, common::Diagnostics& problems);
+// The same, throwing ConfigError with every problem.
+Parameters parameters_from_config(const smc::config::SupervisorConfig& cfg);
+
+}  // namespace smc::supervision
