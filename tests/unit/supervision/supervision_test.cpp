@@ -1,0 +1,112 @@
+// What cell and edge must agree on: module letters, the conversions, and a
+// configuration's validation, which collects every problem.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "smc/documents/load.hpp"
+#include "smc/supervision/config.hpp"
+#include "smc_config.pb.h"
+
+namespace sv = smc::supervision;
+
+namespace {
+
+smc::config::SupervisorConfig shipped(const std::string& name) {
+  return smc::documents::load_supervisor_config(std::string(SMC_SOURCE_DIR) + "/edge/configs/" +
+                                                name);
+}
+
+std::string refusal(const smc::config::SupervisorConfig& cfg) {
+  try {
+    (void)sv::validate(cfg);
+  } catch (const sv::ConfigError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+}  // namespace
+
+TEST(Modules, LettersAndMasks) {
+  EXPECT_EQ(sv::letters(sv::bit(sv::ModuleId::A) | sv::bit(sv::ModuleId::L)), "AL");
+  EXPECT_EQ(sv::module_from_letter("K"), sv::ModuleId::K);
+  EXPECT_FALSE(sv::module_from_letter("Q"));
+  EXPECT_FALSE(sv::module_from_letter("AB"));
+  EXPECT_STREQ(sv::module_name(sv::ModuleId::E), "automatic chatter detector");
+  EXPECT_EQ(sv::kPaperModules, 0x0fff);
+}
+
+TEST(Conversions, ForceReferenceIsPowerOverCuttingSpeed) {
+  // The paper's case: 745.7 W at 1500 rpm on a 25 mm radius: V = 3.927 m/s.
+  const double v = 2 * std::numbers::pi * 0.025 * 1500 / 60;
+  EXPECT_NEAR(sv::cutting_speed_m_s(25, 1500), v, 1e-12);
+  EXPECT_NEAR(sv::force_reference_n(745.7, 25, 1500), 745.7 / v, 1e-9);
+  EXPECT_NEAR(sv::force_reference_n(745.7, 25, 1500, 2), 745.7 / v / 2, 1e-9);
+  EXPECT_EQ(sv::force_reference_n(745.7, 25, 0), 0);
+  EXPECT_NEAR(sv::feedrate_mm_s(0.1, 4, 1500), 10, 1e-12);
+  EXPECT_NEAR(sv::feed_per_tooth_mm(10, 4, 1500), 0.1, 1e-12);
+  EXPECT_EQ(sv::feed_per_tooth_mm(10, 4, 0), 0);
+}
+
+TEST(Validate, ShippedConfigurationsAreValidAndCarryTheirBoundGrafcet) {
+  for (const char* name : {"no_control.textproto", "smc1.textproto", "smc2.textproto"}) {
+    const sv::ValidatedConfig c = sv::validate(shipped(name));
+    ASSERT_TRUE(c.grafcet) << name;
+    EXPECT_GT(c.program.count, 0) << name;
+    EXPECT_TRUE(sv::has(c.modules, sv::ModuleId::A)) << name;
+  }
+  // G brings F (the routine runs the suppressor).
+  EXPECT_TRUE(sv::has(sv::validate(shipped("smc2.textproto")).modules, sv::ModuleId::F));
+}
+
+TEST(Validate, EveryProblemIsListedWithItsFieldAndFix) {
+  auto cfg = shipped("smc2.textproto");
+  cfg.mutable_operation()->set_teeth(0);
+  cfg.mutable_machine()->set_max_spindle_power_w(-1);
+  cfg.add_modules("Q");
+  cfg.mutable_program()->mutable_passes(0)->set_depth_mm(-2);
+  const std::string why = refusal(cfg);
+  EXPECT_NE(why.find("supervisor_config.operation.teeth: must be in [1, 64] (got 0); fix: "),
+            std::string::npos)
+      << why;
+  EXPECT_NE(why.find("supervisor_config.machine.max_spindle_power_w: must be > 0 (got -1)"),
+            std::string::npos)
+      << why;
+  EXPECT_NE(why.find("supervisor_config.modules[11]: 'Q' is not a module"), std::string::npos)
+      << why;
+  EXPECT_NE(why.find("supervisor_config.program.passes[0].depth_mm"), std::string::npos) << why;
+}
+
+TEST(Validate, TooManyPassesAreRefusedAtTheSharedLimit) {
+  auto cfg = shipped("smc2.textproto");
+  const auto pass = cfg.program().passes(0);
+  while (cfg.program().passes_size() <= sv::kMaxPasses) *cfg.mutable_program()->add_passes() = pass;
+  EXPECT_NE(refusal(cfg).find("has 17 passes; at most 16"), std::string::npos) << refusal(cfg);
+}
+
+TEST(Validate, GrafcetNamesAreCheckedBeforeVerification) {
+  auto cfg = shipped("smc2.textproto");
+  std::string g = cfg.grafcet_text();
+  const std::string input_e = "input e ";
+  g.insert(g.find(input_e), "input z \"not the edge's\"\n");
+  cfg.set_grafcet_text(g);
+  const std::string why = refusal(cfg);
+  EXPECT_NE(why.find("input 'z' is not a receptivity of the state supervisor"), std::string::npos)
+      << why;
+  EXPECT_EQ(why.find("fails verification"), std::string::npos) << why;
+}
+
+TEST(Validate, ADiagnosticIsAlwaysOneLine) {
+  auto cfg = shipped("smc1.textproto");
+  cfg.set_config_id("");
+  cfg.set_grafcet_text("");
+  const std::string why = refusal(cfg);
+  ASSERT_FALSE(why.empty());
+  // Two problems, two lines.
+  EXPECT_EQ(std::count(why.begin(), why.end(), '\n'), 1) << why;
+}
