@@ -15,10 +15,7 @@ namespace smc::edge {
 namespace {
 
 std::string modules_string(ModuleMask m) {
-  std::string s;
-  for (int i = 0; i < kModuleCount; ++i) {
-    if ((m >> i) & 1) s.push_back(static_cast<char>('A' + i));
-  }
+  const std::string s = supervision::letters(m);
   return s.empty() ? "-" : s;
 }
 
@@ -96,7 +93,8 @@ void write_outputs(const std::string& dir, const EdgeCore& core, const RunResult
       std::string detail;
       if (e.kind == EventKind::kFault) {
         detail = to_string(e.fault);
-        if (e.module >= 0) detail += std::string(" in module ") + static_cast<char>('A' + e.module);
+        if (e.module >= 0)
+          detail += " in module " + std::string(1, letter(static_cast<ModuleId>(e.module)));
       } else if (e.kind == EventKind::kChatterDetected) {
         char buf[96];
         std::snprintf(buf, sizeof buf, "ratio %.3f at %.0f Hz", e.ratio, e.frequency_hz);
