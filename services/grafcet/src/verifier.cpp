@@ -98,7 +98,10 @@ class Explorer {
     r_.valuations = valuations_.size();
     fired_.assign(g_.transitions().size() + 1, 0);
     fired_ever_.assign(g_.transitions().size(), 0);
+    started_ = std::chrono::steady_clock::now();
     explore();
+    r_.states = states_.size();
+    if (!r_.complete) return std::move(r_);  // what was not explored proves nothing
     unreachable();
     deadlocks();
     notes();
@@ -156,6 +159,7 @@ class Explorer {
       const Mask level_before = net_.level_actions(s.steps);
       r_.reachable_steps |= s.steps;
       for (const Mask v : valuations_) {
+        if (over_budget()) return;
         ++r_.evolutions;
         const Mask rise = root ? 0 : v & ~s.previous & edge_inputs_;
         const Mask fall = root ? 0 : s.previous & ~v & edge_inputs_;
@@ -179,6 +183,7 @@ class Explorer {
         };
         const detail::EvolveResult e =
             detail::evolve(net_, s.steps, v, rise, fall, bound, fired_.data(), on_round);
+        r_.work += std::max<std::uint64_t>(1, e.rounds);
         const Mask activated = e.activated | (root ? net_.initial : 0);
         const PathStep last{v, e.active, net_.impulse_actions(activated),
                             !e.aborted && !e.unstable};
@@ -215,6 +220,26 @@ class Explorer {
         }
       }
     }
+  }
+
+  // Reports (once) and ends the exploration when the work or time budget is spent.
+  bool over_budget() {
+    const bool work = o_.max_work > 0 && r_.work >= o_.max_work;
+    const bool time = o_.max_time.count() > 0 && (r_.evolutions & 255u) == 0 &&
+                      std::chrono::steady_clock::now() - started_ > o_.max_time;
+    if (!work && !time) return false;
+    r_.complete = false;
+    add({Check::kLimit,
+         "budget",
+         work ? "the verification budget of " + std::to_string(o_.max_work) +
+                    " evolution rounds is spent after " + std::to_string(states_.size()) +
+                    " states; the Grafcet is too large to verify exhaustively"
+              : "the verification time budget of " + std::to_string(o_.max_time.count()) +
+                    " ms is spent after " + std::to_string(states_.size()) +
+                    " states; the Grafcet is too large to verify exhaustively",
+         {},
+         {}});
+    return true;
   }
 
   void observe_conflicts(Mask before, const std::uint32_t* fired, std::uint32_t count,
@@ -380,6 +405,7 @@ class Explorer {
   std::set<std::vector<Mask>> cycles_seen_;
   bool long_reported_ = false;
   bool state_limit_reported_ = false;
+  std::chrono::steady_clock::time_point started_{};
 };
 
 }  // namespace

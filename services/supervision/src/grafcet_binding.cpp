@@ -7,7 +7,15 @@
 
 namespace smc::supervision {
 
-BoundGrafcet bind_grafcet(std::string_view text, std::string_view source_name, ModuleMask allowed) {
+BoundGrafcet bind_grafcet(std::string_view text, std::string_view source_name, ModuleMask allowed,
+                          const CheckBudget& budget) {
+  if (text.size() > budget.max_text_bytes) {
+    throw ConfigError(common::Diagnostic{
+        std::string(source_name),
+        "the Grafcet text is " + std::to_string(text.size()) + " bytes; at most " +
+            std::to_string(budget.max_text_bytes),
+        "a supervisor's Grafcet is a few kilobytes; check that this is the right file"});
+  }
   grafcet::ParseResult parsed = grafcet::parse(text, source_name);
   if (!parsed.ok()) {
     // Each parse error names its own file:line:col.
@@ -54,7 +62,10 @@ BoundGrafcet bind_grafcet(std::string_view text, std::string_view source_name, M
   }
   if (!problems.ok()) throw ConfigError(std::move(problems));
 
-  const grafcet::Report report = grafcet::verify(g);
+  grafcet::VerifyOptions vo;
+  vo.max_work = budget.max_work;
+  vo.max_time = budget.max_time;
+  const grafcet::Report report = grafcet::verify(g, vo);
   if (!report.ok()) {
     // One diagnostic per line of the verifier's report (each is one finding
     // or one step of its shortest input path).

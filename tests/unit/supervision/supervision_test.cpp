@@ -4,12 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <string>
 
 #include "smc/documents/load.hpp"
 #include "smc/supervision/config.hpp"
+#include "smc/supervision/grafcet_binding.hpp"
 #include "smc_config.pb.h"
 
 namespace sv = smc::supervision;
@@ -109,4 +111,66 @@ TEST(Validate, ADiagnosticIsAlwaysOneLine) {
   ASSERT_FALSE(why.empty());
   // Two problems, two lines.
   EXPECT_EQ(std::count(why.begin(), why.end(), '\n'), 1) << why;
+}
+
+namespace {
+
+// A Grafcet whose state space is huge although it reads one input: cycles of
+// coprime lengths (3, 4, 5, 7, 11, 13, 17: 60 steps) all advance on each rise
+// of a, so the reachable situations number their product, 1,021,020.
+std::string hostile_grafcet() {
+  std::string g = "grafcet hostile \"many coprime cycles\"\ninput a \"a\"\n";
+  int step = 1, transition = 1;
+  for (int len : {3, 4, 5, 7, 11, 13, 17}) {
+    const int first = step;
+    for (int k = 0; k < len; ++k, ++step) {
+      g += "step " + std::to_string(step) + (k == 0 ? " initial" : "") + " \"s\"\n";
+    }
+    for (int k = 0; k < len; ++k) {
+      const int from = first + k, to = first + (k + 1) % len;
+      g += "transition " + std::to_string(transition++) + ": " + std::to_string(from) + " -> " +
+           std::to_string(to) + " when ↑a\n";
+    }
+  }
+  return g;
+}
+
+}  // namespace
+
+TEST(GrafcetBudget, AHugeStateSpaceIsRefusedByTheWorkBudget) {
+  sv::CheckBudget budget;
+  budget.max_time = std::chrono::milliseconds{0};  // the deterministic budget alone
+  try {
+    (void)sv::bind_grafcet(hostile_grafcet(), "hostile.grafcet", sv::kPaperModules, budget);
+    FAIL() << "a Grafcet of ten million situations was accepted";
+  } catch (const sv::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("verification budget of 500000 evolution rounds is spent"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(GrafcetBudget, TheShippedSupervisorsFitWithinAHundredthOfIt) {
+  sv::CheckBudget budget;
+  budget.max_time = std::chrono::milliseconds{0};
+  budget.max_work = 5'000;
+  for (const char* name : {"smc1.textproto", "smc2.textproto"}) {
+    const auto cfg = shipped(name);
+    EXPECT_NO_THROW(
+        (void)sv::bind_grafcet(cfg.grafcet_text(), cfg.grafcet_name(), sv::kPaperModules, budget))
+        << name;
+  }
+}
+
+TEST(GrafcetBudget, AnOversizedTextIsRefusedBeforeParsing) {
+  const std::string big(70 * 1024, '#');
+  try {
+    (void)sv::bind_grafcet(big, "big.grafcet", sv::kPaperModules);
+    FAIL();
+  } catch (const sv::ConfigError& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("big.grafcet: the Grafcet text is 71680 bytes; at most 65536"),
+        std::string::npos)
+        << e.what();
+  }
 }

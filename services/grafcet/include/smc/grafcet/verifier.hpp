@@ -7,6 +7,7 @@
 // violation that happens on the way carries a shortest input sequence from
 // the initial situation. Offline only (allocates).
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -56,6 +57,14 @@ struct VerifyOptions {
   std::size_t max_inputs = 20;                   // inputs read by the Grafcet, enumerated 2^n
   std::size_t max_states = 1u << 20;             // explored states
   std::size_t max_per_check = 10;                // violations kept per check (the rest counted)
+  // Work budget: evolution rounds summed over the exploration (each
+  // evolution counts at least one). Deterministic: the same Grafcet and
+  // budget give the same verdict on any machine. Exceeding it is a kLimit
+  // violation and ends the exploration. 0: no budget.
+  std::uint64_t max_work = 0;
+  // Wall-clock budget, checked every 256 evolutions; 0: none. A guard for
+  // what the work budget does not count (e.g. a slow machine).
+  std::chrono::milliseconds max_time{0};
 };
 
 struct Report {
@@ -70,6 +79,8 @@ struct Report {
   std::size_t stable_situations = 0;    // distinct reachable stable situations
   std::uint32_t longest_transient = 0;  // most rounds in one evaluation
   std::uint32_t max_rounds = 0;         // the engine bound checked against
+  std::uint64_t work = 0;               // evolution rounds summed (see VerifyOptions::max_work)
+  bool complete = true;                 // the exploration was not cut short by a budget
   Mask inputs_read = 0;                 // inputs enumerated
   Mask reachable_steps = 0;
   bool ok() const noexcept { return violations.empty(); }

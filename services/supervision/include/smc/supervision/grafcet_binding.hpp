@@ -7,6 +7,9 @@
 // and edge alike. Not for the real-time loop (allocates).
 
 #include <array>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
 #include <string_view>
 
 #include "smc/grafcet/model.hpp"
@@ -35,10 +38,22 @@ struct BoundGrafcet {
   std::array<int, kReceptivityCount> input_index{};
 };
 
-// Parses `text` (named `source_name` in messages), checks that every action
-// is a module in `allowed` and every input a receptivity a–e, then verifies
-// it. Throws ConfigError: parse errors as "file:line:col: …", a bad action
-// or input naming it, a failed verification with the verifier's report.
-BoundGrafcet bind_grafcet(std::string_view text, std::string_view source_name, ModuleMask allowed);
+// What checking one Grafcet may cost. The shipped SMC II needs 1,056
+// evolutions and a few thousand rounds; the defaults allow about a hundred
+// times that, so a supervisor's Grafcet is checked in well under 100 ms and
+// a hostile one is refused instead of holding up its caller.
+struct CheckBudget {
+  std::size_t max_text_bytes = 64 * 1024;   // before parsing
+  std::uint64_t max_work = 500'000;         // evolution rounds (deterministic)
+  std::chrono::milliseconds max_time{500};  // wall-clock guard
+};
+
+// Refuses a text over the budget's size, parses it (named `source_name` in
+// messages), checks that every action is a module in `allowed` and every
+// input a receptivity a–e, then verifies it within the budget. Throws
+// ConfigError: parse errors as "file:line:col: …", a bad action or input
+// naming it, a failed or over-budget verification with the verifier's report.
+BoundGrafcet bind_grafcet(std::string_view text, std::string_view source_name, ModuleMask allowed,
+                          const CheckBudget& budget = {});
 
 }  // namespace smc::supervision
