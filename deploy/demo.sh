@@ -23,11 +23,10 @@ while [[ $# -gt 0 ]]; do
 done
 
 deploy/setup.sh
-echo "== building (release)"
-cmake --preset release >/dev/null
-targets=(smc-cell smc-edge)
-[[ -f dashboard/CMakeLists.txt ]] && targets+=(smc-dashboard)
-cmake --build --preset release --target "${targets[@]}"
+echo "== building (ci preset: the same build tree and flags as deploy/test.sh)"
+cmake --preset ci >/dev/null
+targets=(smc-cell smc-edge smc-dashboard)
+cmake --build --preset ci --target "${targets[@]}"
 bin=$root/build/release/bin
 
 export CYCLONEDDS_URI="file://$root/deploy/cyclonedds/loopback.xml"

@@ -9,7 +9,7 @@ set -euo pipefail
 
 packages=(
   # toolchain
-  build-essential cmake ninja-build pkg-config
+  build-essential cmake ninja-build pkg-config clang-format
   # DDS (C library, idlc, ddsperf)
   cyclonedds-dev cyclonedds-tools
   # libraries

@@ -2,7 +2,7 @@
 # Runs every test of the project on this machine, installing what it needs.
 # This is the README's test command; .ci/run calls it and nothing else.
 #
-#   deploy/test.sh              set up, build (release, warnings as errors), run all tests
+#   deploy/test.sh              set up, check formatting, build (ci preset), run all tests
 #   deploy/test.sh -R PATTERN   only the ctest tests matching PATTERN
 #
 # Every DDS participant in the tests uses deploy/cyclonedds/loopback.xml
@@ -15,12 +15,15 @@ deploy/setup.sh
 export CYCLONEDDS_URI="file://$PWD/deploy/cyclonedds/loopback.xml"
 start=$(date +%s)
 
-echo "== configure and build (release, -Werror)"
-cmake --preset release -DSMC_WERROR=ON -DSMC_BUILD_TESTS=ON -DSMC_BUILD_BENCHMARKS=ON >/dev/null
-cmake --build --preset release
+echo "== format (clang-format --dry-run -Werror over every tracked C/C++ file)"
+deploy/check-format.sh
+
+echo "== configure and build (ci preset: release, -Werror, tests and benchmarks)"
+cmake --preset ci >/dev/null
+cmake --build --preset ci
 
 echo "== tests"
-ctest --preset release "$@"
+ctest --preset ci "$@"
 
 # The cell as containers on an internal network, with faults (or, where
 # podman cannot run, one network namespace per service; it says which).
