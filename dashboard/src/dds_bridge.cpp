@@ -11,11 +11,11 @@
 
 #include "cell_state.hpp"
 #include "event.hpp"
-#include "smc/transport/document.hpp"
-#include "smc/transport/endpoint.hpp"
+#include "smc/common/clock.hpp"
+#include "smc/transport/dispatcher.hpp"
 #include "smc/transport/participant.hpp"
+#include "smc/wire/documents.hpp"
 #include "smc/wire/topics.hpp"
-#include "smc_config.pb.h"
 
 namespace smc::dashboard {
 
@@ -24,25 +24,9 @@ namespace {
 using namespace std::chrono_literals;
 namespace tr = smc::transport;
 
-enum Token : std::int64_t {
-  kSummaryToken,
-  kBatchToken,
-  kSituationToken,
-  kStatusToken,
-  kChatterToken,
-  kProgressToken,
-  kConfigToken,
-  kProgramToken,
-  kJobToken,
-};
-
 // Samples taken per reader per wake-up, so that one busy topic cannot starve
 // the others (or the command queue) for long.
 constexpr std::size_t kTakeBatch = 256;
-
-tr::Schema schema_of(const google::protobuf::Message& m) {
-  return tr::Schema{m.GetDescriptor()->full_name(), config::SCHEMA_VERSION_CURRENT};
-}
 
 smc_data_OperatorAction wire_action(CommandAction a) {
   switch (a) {
@@ -56,11 +40,7 @@ smc_data_OperatorAction wire_action(CommandAction a) {
   return smc_data_OP_FEED_HOLD_ON;
 }
 
-std::uint64_t unix_now_ns() {
-  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                        std::chrono::system_clock::now().time_since_epoch())
-                                        .count());
-}
+std::uint64_t unix_now_ns() { return static_cast<std::uint64_t>(smc::unix_time_ns()); }
 
 tr::ParticipantOptions participant_options(const DdsOptions& o) {
   tr::ParticipantOptions p;
@@ -73,8 +53,8 @@ tr::ParticipantOptions participant_options(const DdsOptions& o) {
 }  // namespace
 
 struct DdsBridge::Impl {
-  Impl(const DdsOptions& options, CellState& s, EventSink& k)
-      : state(s),
+  Impl(const DdsOptions& options, CellState& cell, EventSink& k)
+      : state(cell),
         sink(k),
         participant(participant_options(options)),
         summary_topic(participant),
@@ -84,30 +64,74 @@ struct DdsBridge::Impl {
         chatter_topic(participant),
         progress_topic(participant),
         command_topic(participant),
-        config_topic(participant, wire::kConfigTopic),
-        program_topic(participant, wire::kProgramTopic),
-        job_topic(participant, wire::kJobStatusTopic),
         summaries(summary_topic),
         batches(batch_topic),
         situations(situation_topic),
         statuses(status_topic),
         chatters(chatter_topic),
         progresses(progress_topic),
-        configs(config_topic, schema_of(config::SupervisorConfig::default_instance())),
-        programs(program_topic, schema_of(config::PartProgram::default_instance())),
-        jobs(job_topic, schema_of(config::JobStatus::default_instance())),
+        configs(participant),
+        programs(participant),
+        jobs(participant),
         commands(command_topic),
-        waitset(participant),
+        dispatcher(participant),
         next_command_id(unix_now_ns() / 1000) {
-    waitset.attach(summaries, kSummaryToken);
-    waitset.attach(batches, kBatchToken);
-    waitset.attach(situations, kSituationToken);
-    waitset.attach(statuses, kStatusToken);
-    waitset.attach(chatters, kChatterToken);
-    waitset.attach(progresses, kProgressToken);
-    waitset.attach(configs.reader(), kConfigToken);
-    waitset.attach(programs.reader(), kProgramToken);
-    waitset.attach(jobs.reader(), kJobToken);
+    using P = tr::Dispatcher::Priority;
+    // Operator commands first: they are written before any reader is served.
+    dispatcher.poll([this] { write_pending_commands(); }, P::kFirst);
+    serve(summaries, [this](const smc_data_ForceSummary& s, std::int64_t t) {
+      publish(state.on_summary(s, t));
+    });
+    serve(batches,
+          [this](const smc_data_ForceBatch& b, std::int64_t t) { publish(state.on_batch(b, t)); });
+    serve(situations, [this](const smc_data_SupervisorSituation& s, std::int64_t t) {
+      publish(state.on_situation(s, t));
+    });
+    dispatcher.on_instances(
+        statuses,
+        [this](const smc_data_EdgeStatus& s, const tr::SampleInfo&) {
+          publish(state.on_status(s));
+        },
+        // The key sample of an edge whose writer is gone.
+        [this](const smc_data_EdgeStatus& s, tr::InstanceState) {
+          publish(state.on_edge_gone(wire::get_string(s.machine_id)));
+        });
+    serve(chatters,
+          [this](const smc_data_ChatterEvent& e, std::int64_t) { publish(state.on_chatter(e)); });
+    serve(progresses,
+          [this](const smc_data_JobProgress& p, std::int64_t) { publish(state.on_progress(p)); });
+    auto on_reject = [this](const tr::DocumentError& err) {
+      documents_rejected.fetch_add(1, std::memory_order_relaxed);
+      spdlog::warn("dds: rejected document: {}", err.message);
+    };
+    dispatcher.on(configs.reader(), [this, on_reject] {
+      configs.take([&](const std::string& key,
+                       const config::SupervisorConfig& c) { publish(state.on_config(key, c)); },
+                   on_reject);
+    });
+    dispatcher.on(programs.reader(), [this, on_reject] {
+      programs.take([&](const std::string& key,
+                        const config::PartProgram& p) { publish(state.on_program(key, p)); },
+                    on_reject);
+    });
+    dispatcher.on(jobs.reader(), [this, on_reject] {
+      jobs.take([&](const std::string& key,
+                    const config::JobStatus& j) { publish(state.on_job(key, j)); },
+                on_reject);
+    });
+  }
+
+  // A data-plane reader: valid samples, at most kTakeBatch per wake-up so
+  // one busy topic cannot starve the others.
+  template <class T, class F>
+  void serve(tr::Reader<T>& reader, F on_sample) {
+    dispatcher.on(reader, [&reader, on_sample] {
+      reader.take(
+          [&](const T& s, const tr::SampleInfo& i) {
+            if (i.valid_data) on_sample(s, i.source_timestamp_ns);
+          },
+          kTakeBatch);
+    });
   }
 
   void publish(std::vector<Event> events) {
@@ -115,12 +139,9 @@ struct DdsBridge::Impl {
   }
 
   void run() {
-    std::vector<std::int64_t> fired;
     while (!stopping.load(std::memory_order_acquire)) {
       try {
-        waitset.wait(500ms, fired);
-        write_pending_commands();
-        for (const auto token : fired) take(token);
+        dispatcher.run_once(500ms);
       } catch (const std::exception& e) {
         // A failing DDS call must not end the dashboard; report and go on.
         spdlog::error("dds: {}", e.what());
@@ -128,79 +149,6 @@ struct DdsBridge::Impl {
       }
     }
     fail_pending_commands("the dashboard is stopping");
-  }
-
-  void take(std::int64_t token) {
-    auto on_reject = [this](const tr::DocumentError& err) {
-      documents_rejected.fetch_add(1, std::memory_order_relaxed);
-      spdlog::warn("dds: rejected document: {}", err.message);
-    };
-    switch (token) {
-      case kSummaryToken:
-        summaries.take(
-            [&](const smc_data_ForceSummary& s, const tr::SampleInfo& i) {
-              if (i.valid_data) publish(state.on_summary(s, i.source_timestamp_ns));
-            },
-            kTakeBatch);
-        break;
-      case kBatchToken:
-        batches.take(
-            [&](const smc_data_ForceBatch& b, const tr::SampleInfo& i) {
-              if (i.valid_data) publish(state.on_batch(b, i.source_timestamp_ns));
-            },
-            kTakeBatch);
-        break;
-      case kSituationToken:
-        situations.take(
-            [&](const smc_data_SupervisorSituation& s, const tr::SampleInfo& i) {
-              if (i.valid_data) publish(state.on_situation(s, i.source_timestamp_ns));
-            },
-            kTakeBatch);
-        break;
-      case kStatusToken:
-        statuses.take(
-            [&](const smc_data_EdgeStatus& s, const tr::SampleInfo& i) {
-              if (i.valid_data) {
-                publish(state.on_status(s));
-              } else if (i.instance_state != tr::InstanceState::kAlive) {
-                // Invalid samples carry the key: this edge's writer is gone.
-                publish(state.on_edge_gone(wire::get_string(s.machine_id)));
-              }
-            },
-            kTakeBatch);
-        break;
-      case kChatterToken:
-        chatters.take(
-            [&](const smc_data_ChatterEvent& e, const tr::SampleInfo& i) {
-              if (i.valid_data) publish(state.on_chatter(e));
-            },
-            kTakeBatch);
-        break;
-      case kProgressToken:
-        progresses.take(
-            [&](const smc_data_JobProgress& p, const tr::SampleInfo& i) {
-              if (i.valid_data) publish(state.on_progress(p));
-            },
-            kTakeBatch);
-        break;
-      case kConfigToken:
-        configs.take([&](const std::string& key,
-                         const config::SupervisorConfig& c) { publish(state.on_config(key, c)); },
-                     on_reject);
-        break;
-      case kProgramToken:
-        programs.take([&](const std::string& key,
-                          const config::PartProgram& p) { publish(state.on_program(key, p)); },
-                      on_reject);
-        break;
-      case kJobToken:
-        jobs.take([&](const std::string& key,
-                      const config::JobStatus& j) { publish(state.on_job(key, j)); },
-                  on_reject);
-        break;
-      default:
-        break;
-    }
   }
 
   void write_pending_commands() {
@@ -263,20 +211,17 @@ struct DdsBridge::Impl {
   tr::Topic<smc_data_ChatterEvent> chatter_topic;
   tr::Topic<smc_data_JobProgress> progress_topic;
   tr::Topic<smc_data_OperatorCommand> command_topic;
-  tr::Topic<smc_data_Envelope> config_topic;
-  tr::Topic<smc_data_Envelope> program_topic;
-  tr::Topic<smc_data_Envelope> job_topic;
   tr::Reader<smc_data_ForceSummary> summaries;
   tr::Reader<smc_data_ForceBatch> batches;
   tr::Reader<smc_data_SupervisorSituation> situations;
   tr::Reader<smc_data_EdgeStatus> statuses;
   tr::Reader<smc_data_ChatterEvent> chatters;
   tr::Reader<smc_data_JobProgress> progresses;
-  tr::DocumentReader<config::SupervisorConfig> configs;
-  tr::DocumentReader<config::PartProgram> programs;
-  tr::DocumentReader<config::JobStatus> jobs;
+  wire::DocumentSubscriber<config::SupervisorConfig> configs;
+  wire::DocumentSubscriber<config::PartProgram> programs;
+  wire::DocumentSubscriber<config::JobStatus> jobs;
   tr::Writer<smc_data_OperatorCommand> commands;
-  tr::WaitSet waitset;
+  tr::Dispatcher dispatcher;
 
   std::thread thread;
   std::atomic<bool> stopping{false};
@@ -302,7 +247,7 @@ void DdsBridge::stop() noexcept {
   if (!impl_->thread.joinable()) return;
   impl_->stopping.store(true, std::memory_order_release);
   try {
-    impl_->waitset.wake();
+    impl_->dispatcher.wake();
   } catch (...) {  // the wait times out within 500 ms anyway
   }
   impl_->thread.join();
@@ -318,7 +263,7 @@ void DdsBridge::submit(CommandRequest request, Done done) {
     }
   }
   if (queued) {
-    impl_->waitset.wake();
+    impl_->dispatcher.wake();
     return;
   }
   CommandRecord rec;

@@ -11,12 +11,14 @@
 
 #include "smc/cell/planner.hpp"
 #include "smc/cell/store/store.hpp"
+#include "smc/common/clock.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/machining/force_process.hpp"
 #include "smc/machining/model_proto.hpp"
 #include "smc/supervision/config.hpp"
-#include "smc/transport/document.hpp"
+#include "smc/transport/dispatcher.hpp"
 #include "smc/transport/participant.hpp"
+#include "smc/wire/documents.hpp"
 #include "smc/wire/topics.hpp"
 
 namespace smc::cell {
@@ -28,16 +30,6 @@ using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-
-const tr::Schema kConfigSchema{"smc.config.SupervisorConfig", cfg::SCHEMA_VERSION_CURRENT};
-const tr::Schema kJobSchema{"smc.config.JobAssignment", cfg::SCHEMA_VERSION_CURRENT};
-const tr::Schema kStatusSchema{"smc.config.JobStatus", cfg::SCHEMA_VERSION_CURRENT};
-
-int64_t unix_ms() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string config_id_for(const store::Job& j, uint32_t attempt) {
   return j.id + "-a" + std::to_string(attempt);
@@ -63,8 +55,9 @@ struct CellService::Impl {
   store::Store db;
   Planner planner;
   tr::Participant participant;
-  tr::Topic<smc_data_Envelope> config_topic, job_topic, status_doc_topic;
-  tr::DocumentWriter config_writer, job_writer, status_doc_writer;
+  smc::wire::DocumentPublisher<cfg::SupervisorConfig> config_writer;
+  smc::wire::DocumentPublisher<cfg::JobAssignment> job_writer;
+  smc::wire::DocumentPublisher<cfg::JobStatus> status_doc_writer;
   tr::Topic<smc_data_EdgeStatus> edge_topic;
   tr::Reader<smc_data_EdgeStatus> edge_reader;
   tr::Topic<smc_data_JobProgress> progress_topic;
@@ -73,7 +66,7 @@ struct CellService::Impl {
   tr::Reader<smc_data_ForceSummary> summary_reader;
   tr::Topic<smc_data_ChatterEvent> chatter_topic;
   tr::Reader<smc_data_ChatterEvent> chatter_reader;
-  tr::WaitSet waitset;
+  tr::Dispatcher dispatcher;
 
   std::map<std::string, Mill> mills;
   std::map<std::string, Progress> progress;                             // by job id
@@ -88,12 +81,9 @@ struct CellService::Impl {
         db(store::Store::open(opt.db_path, store::OpenMode::kExisting)),
         planner(opt.grafcet_dir, load_defaults(opt.defaults_file)),
         participant({.domain_id = opt.domain_id, .partition = opt.partition}),
-        config_topic(participant, smc::wire::kConfigTopic),
-        job_topic(participant, smc::wire::kJobTopic),
-        status_doc_topic(participant, smc::wire::kJobStatusTopic),
-        config_writer(config_topic, kConfigSchema),
-        job_writer(job_topic, kJobSchema),
-        status_doc_writer(status_doc_topic, kStatusSchema),
+        config_writer(participant),
+        job_writer(participant),
+        status_doc_writer(participant),
         edge_topic(participant),
         edge_reader(edge_topic),
         progress_topic(participant),
@@ -102,10 +92,14 @@ struct CellService::Impl {
         summary_reader(summary_topic),
         chatter_topic(participant),
         chatter_reader(chatter_topic),
-        waitset(participant) {
-    waitset.attach(edge_reader, 1);
-    waitset.attach(progress_reader, 2);
-    waitset.attach(chatter_reader, 3);
+        dispatcher(participant) {
+    dispatcher.on_instances(
+        edge_reader,
+        [this](const smc_data_EdgeStatus& s, const tr::SampleInfo&) { on_edge_status(s); },
+        [this](const smc_data_EdgeStatus& s, tr::InstanceState) { on_edge_gone(s); });
+    dispatcher.on(progress_reader, [this] { take_progress(); });
+    dispatcher.on(chatter_reader, [this] { take_chatter(); });
+    dispatcher.poll([this] { take_summaries(); });  // high rate: in batches, never a wake-up
     for (const auto& m : db.machines()) mills[m.id];
   }
 
@@ -138,7 +132,7 @@ struct CellService::Impl {
     }
     if (j.state == cfg::JOB_DONE) st.set_fraction_done(1.0);
     if (j.result) *st.mutable_result() = *j.result;
-    st.set_updated_unix_ms(unix_ms());
+    st.set_updated_unix_ms(smc::unix_time_ms());
     st.set_reason(reason);
     status_doc_writer.publish(j.id, j.id, st);
   }
@@ -250,22 +244,22 @@ struct CellService::Impl {
 
   // ------------------------------------------------------------- edges --
 
-  void take_edges() {
-    edge_reader.take([&](const smc_data_EdgeStatus& s, const tr::SampleInfo& info) {
-      const std::string id = get_string(s.machine_id);
-      auto it = mills.find(id);
-      if (it == mills.end()) return;
-      if (info.valid_data && info.instance_state == tr::InstanceState::kAlive) {
-        if (!it->second.alive) spdlog::info("edge {} is alive", id);
-        it->second.alive = true;
-        it->second.seen = true;
-        it->second.state = s.state;
-      } else if (info.instance_state != tr::InstanceState::kAlive && it->second.alive) {
-        spdlog::warn("edge {} lost (liveliness)", id);
-        it->second.alive = false;
-        it->second.lost_since = Clock::now();
-      }
-    });
+  void on_edge_status(const smc_data_EdgeStatus& s) {
+    const std::string id = get_string(s.machine_id);
+    auto it = mills.find(id);
+    if (it == mills.end()) return;
+    if (!it->second.alive) spdlog::info("edge {} is alive", id);
+    it->second.alive = true;
+    it->second.seen = true;
+    it->second.state = s.state;
+  }
+
+  void on_edge_gone(const smc_data_EdgeStatus& key) {
+    auto it = mills.find(get_string(key.machine_id));
+    if (it == mills.end() || !it->second.alive) return;
+    spdlog::warn("edge {} lost (liveliness)", it->first);
+    it->second.alive = false;
+    it->second.lost_since = Clock::now();
   }
 
   void check_lost_edges() {
@@ -453,13 +447,8 @@ struct CellService::Impl {
                  mills.size());
     resume();
     for (const auto& j : db.jobs({.with_documents = true})) publish_status(j, "current");
-    std::vector<int64_t> fired;
     while (!stop.load()) {
-      waitset.wait(50ms, fired);
-      take_edges();
-      take_progress();
-      take_chatter();
-      take_summaries();
+      dispatcher.run_once(50ms);
       const int64_t v = db.data_version();
       if (v != data_version || Clock::now() - last_scan > 1s) {
         data_version = v;

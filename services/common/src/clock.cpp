@@ -26,4 +26,10 @@ void VirtualClock::sleep_until(Nanos deadline) noexcept {
   }
 }
 
+int64_t unix_time_ns() noexcept {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
 }  // namespace smc

@@ -3,6 +3,13 @@
 // HTTP (the page, a REST API, a Server-Sent Events stream) and operator
 // commands back onto DDS. main() parses flags and calls run(); tests start a
 // Dashboard in-process on a free port and a partition of their own.
+//
+// Boundary policy. The dashboard is a view: it never ends because of what it
+// receives. A malformed document is counted and dropped; a failing DDS call
+// in the loop is logged and the loop goes on after 100 ms; a bad HTTP
+// request gets a 4xx naming what is wrong; an operator command that cannot be
+// written is answered as failed to its sender. Only failing to create the
+// participant or to bind the HTTP port at start-up ends the process.
 
 #include <chrono>
 #include <cstddef>

@@ -15,6 +15,16 @@
 // starts only under an accepted configuration whose id it names, and each
 // (job, attempt) runs at most once in the life of the process. The comms
 // thread is the caller's; the loop thread never touches DDS.
+//
+// Boundary policy. Input from outside (documents, assignments, commands) is
+// checked where it enters: a bad one is logged, reported on smc_edge_status
+// and dropped, and nothing accepted before is lost; a job never runs under
+// an unchecked configuration. A command for another machine is ignored.
+// Operator commands are served before any other reader on every wake-up.
+// A DDS failure (DdsError: the participant or a topic cannot be created or
+// written) ends run() with the exception: the process exits non-zero and
+// its supervisor (systemd, the container runtime) restarts it; the journal
+// makes sure a half-cut job is reported interrupted, never cut again.
 
 #include <atomic>
 #include <chrono>

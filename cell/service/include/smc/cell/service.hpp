@@ -3,6 +3,14 @@
 // (SMC I or II, with an explanation), planned, configured, verified and
 // dispatched to idle mills over DDS; their progress is tracked and every
 // state change persisted. See cell/README.md for the job policy.
+//
+// Boundary policy. A job that cannot be planned or whose configuration does
+// not validate is marked failed with the reason, and the cell goes on. Edge
+// reports that name an unknown job or another machine are ignored;
+// malformed documents are dropped by the transport's checks. A database or
+// DDS failure (StoreError, DdsError) ends run() with the exception: the
+// process exits non-zero and is restarted by its supervisor; everything the
+// cell accepted is in the database and is resumed on restart.
 
 #include <atomic>
 #include <chrono>

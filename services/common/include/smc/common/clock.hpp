@@ -42,6 +42,12 @@ class VirtualClock final : public Clock {
   std::atomic<int64_t> now_;
 };
 
+// Wall-clock time (CLOCK_REALTIME) since the Unix epoch, for time stamps
+// that leave the process (documents, logs, ids that must survive a
+// restart). Never for stepping: use a Clock.
+int64_t unix_time_ns() noexcept;
+inline int64_t unix_time_ms() noexcept { return unix_time_ns() / 1'000'000; }
+
 // Seconds as double, for the numerical code.
 inline double to_seconds(Nanos t) noexcept { return static_cast<double>(t.count()) * 1e-9; }
 inline Nanos from_seconds(double s) noexcept {
