@@ -9,6 +9,7 @@
 #include <set>
 #include <vector>
 
+#include "smc/cell/dispatch.hpp"
 #include "smc/cell/planner.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/common/clock.hpp"
@@ -205,26 +206,25 @@ struct CellService::Impl {
   }
 
   void dispatch() {
-    auto busy = busy_machines();
-    auto planned = db.jobs({.state = cfg::JOB_PLANNED, .with_documents = true});
-    std::stable_sort(planned.begin(), planned.end(), [](const store::Job& a, const store::Job& b) {
-      return a.spec.priority() > b.spec.priority();
-    });
+    const auto planned = db.jobs({.state = cfg::JOB_PLANNED, .with_documents = true});
+    std::vector<PlannedJob> candidates;
     for (const auto& j : planned) {
-      for (auto& [id, mill] : mills) {
-        if (busy.count(id) || !mill.alive) continue;
-        if (mill.state != smc_data_EDGE_IDLE && mill.state != smc_data_EDGE_CONFIGURED) continue;
-        if (!j.spec.machine_id().empty() && j.spec.machine_id() != id) continue;
-        const auto m = db.machine(id);
-        if (!m) continue;
-        const uint32_t attempt = j.attempt + 1;
-        if (!move(j, cfg::JOB_ASSIGNED,
-                  "dispatched to " + id + " (attempt " + std::to_string(attempt) + ")", id))
-          break;
-        send(*db.job(j.id), *m, attempt);
-        busy.insert(id);
-        break;
-      }
+      candidates.push_back({j.id, j.spec.priority(), j.spec.machine_id(), j.attempt});
+    }
+    std::vector<MillView> views;
+    for (const auto& [id, mill] : mills) {
+      views.push_back({id, mill.alive,
+                       mill.state == smc_data_EDGE_IDLE || mill.state == smc_data_EDGE_CONFIGURED});
+    }
+    for (const Assignment& a : choose_assignments(candidates, views, busy_machines())) {
+      const auto j = db.job(a.job_id);
+      const auto m = db.machine(a.machine_id);
+      if (!j || !m) continue;
+      if (!move(*j, cfg::JOB_ASSIGNED,
+                "dispatched to " + a.machine_id + " (attempt " + std::to_string(a.attempt) + ")",
+                a.machine_id))
+        continue;
+      send(*db.job(a.job_id), *m, a.attempt);
     }
   }
 
@@ -267,9 +267,7 @@ struct CellService::Impl {
     for (auto s : {cfg::JOB_ASSIGNED, cfg::JOB_RUNNING}) {
       for (const auto& j : db.jobs({.state = s})) {
         const Mill& m = mills[j.machine_id];
-        if (m.alive) continue;
-        const auto since = std::max(m.lost_since, started);
-        if (now - since < opt.edge_grace) continue;
+        if (!edge_lost_past_grace(m.alive, m.lost_since, started, now, opt.edge_grace)) continue;
         interrupt(j, "edge " + j.machine_id +
                          (m.seen ? " lost (liveliness)" : " not seen since the cell started"));
       }
@@ -280,14 +278,8 @@ struct CellService::Impl {
     if (!move(j, cfg::JOB_INTERRUPTED, why)) return;
     withdraw(j.machine_id);
     const auto now = *db.job(j.id);
-    if (now.attempt < opt.max_attempts) {
-      move(now, cfg::JOB_QUEUED,
-           "re-queued after attempt " + std::to_string(now.attempt) + " of " +
-               std::to_string(opt.max_attempts));
-    } else {
-      move(now, cfg::JOB_FAILED,
-           "interrupted on every one of " + std::to_string(opt.max_attempts) + " attempts");
-    }
+    const AfterInterruption next = after_interruption(now.attempt, opt.max_attempts);
+    move(now, next.requeue ? cfg::JOB_QUEUED : cfg::JOB_FAILED, next.reason);
   }
 
   // ---------------------------------------------------------- progress --
