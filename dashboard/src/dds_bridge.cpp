@@ -100,7 +100,7 @@ struct DdsBridge::Impl {
           [this](const smc_data_ChatterEvent& e, std::int64_t) { publish(state.on_chatter(e)); });
     serve(progresses,
           [this](const smc_data_JobProgress& p, std::int64_t) { publish(state.on_progress(p)); });
-    auto on_reject = [this](const tr::DocumentError& err) {
+    auto on_reject = [this](const tr::EnvelopeRejection& err) {
       documents_rejected.fetch_add(1, std::memory_order_relaxed);
       spdlog::warn("dds: rejected document: {}", err.message);
     };

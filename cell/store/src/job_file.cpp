@@ -10,7 +10,7 @@ smc::config::Job load_job_file(const std::string& path) {
   try {
     smc::documents::load(path, job);
   } catch (const smc::documents::DocumentError& e) {
-    throw JobFileError(e.what());  // already "path:line:col: ..." / "path: ..."
+    throw JobFileError(e.diagnostics());  // already "path:line:col: ..." / "path: ..."
   }
   return job;
 }
@@ -20,12 +20,9 @@ Job submit_job_file(Store& store, const std::string& path) {
   try {
     return store.submit_job(spec, "submitted from " + path);
   } catch (const JobRejected& e) {
-    std::string msg;
-    for (const auto& fe : e.errors) {
-      if (!msg.empty()) msg += '\n';
-      msg += path + ": " + fe.str();
-    }
-    throw JobFileError(msg);
+    common::Diagnostics problems;
+    for (const auto& fe : e.errors) problems.add(path + ": " + fe.where, fe.message, fe.fix);
+    throw JobFileError(std::move(problems));
   }
 }
 

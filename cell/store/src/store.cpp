@@ -35,12 +35,6 @@ bool has_table(sqlite3* db, const std::string& file, const std::string& name) {
 
 }  // namespace
 
-std::string FieldError::str() const {
-  std::string s = field + ": " + message;
-  if (!fix.empty()) s += "; fix: " + fix;
-  return s;
-}
-
 namespace {
 std::string join_errors(const std::vector<FieldError>& errors) {
   std::string s;

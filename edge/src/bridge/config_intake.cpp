@@ -52,7 +52,7 @@ void EdgeService::Impl::take_configs() {
         config = cfg;
         set_state(smc_data_EDGE_CONFIGURED, "configuration '" + cfg.config_id() + "' in force");
       },
-      [&](const tr::DocumentError& e) {
+      [&](const tr::EnvelopeRejection& e) {
         if (e.key != opt.machine_id) return;
         spdlog::error("{}: configuration rejected: {}", opt.machine_id, e.message);
         message = std::string("configuration rejected (") + tr::to_string(e.fault) +

@@ -18,7 +18,7 @@ void EdgeService::Impl::take_jobs() {
         }
         waiting = a;
       },
-      [&](const tr::DocumentError& e) {
+      [&](const tr::EnvelopeRejection& e) {
         if (e.key == opt.machine_id)
           spdlog::error("{}: assignment rejected: {}", opt.machine_id, e.message);
       });

@@ -16,22 +16,30 @@ namespace smc::documents {
 
 namespace {
 
+// Protobuf's messages can quote the offending text: keep each one bounded.
+std::string bounded(const std::string& message) {
+  constexpr std::size_t kMax = 240;
+  if (message.size() <= kMax) return message;
+  return message.substr(0, kMax) + "…(" + std::to_string(message.size()) + " bytes)";
+}
+
 class Collector final : public google::protobuf::io::ErrorCollector {
  public:
   explicit Collector(std::string name) : name_(std::move(name)) {}
   void AddError(int line, google::protobuf::io::ColumnNumber column,
                 const std::string& message) override {
-    out_ << name_ << ":" << line + 1 << ":" << column + 1 << ": " << message << "\n";
+    problems_.add(name_ + ":" + std::to_string(line + 1) + ":" + std::to_string(column + 1),
+                  bounded(message));
   }
   void AddWarning(int line, google::protobuf::io::ColumnNumber column,
                   const std::string& message) override {
     AddError(line, column, "warning: " + message);
   }
-  std::string text() const { return out_.str(); }
+  common::Diagnostics& problems() { return problems_; }
 
  private:
   std::string name_;
-  std::ostringstream out_;
+  common::Diagnostics problems_;
 };
 
 bool is_json(const std::string& path) { return std::filesystem::path(path).extension() == ".json"; }
@@ -39,6 +47,11 @@ bool is_json(const std::string& path) { return std::filesystem::path(path).exten
 }  // namespace
 
 std::string read_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw DocumentError(
+        common::Diagnostic{path, "is a folder, not a document", "give a .textproto or .json file"});
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw DocumentError(path + ": cannot open (" + std::string(std::strerror(errno)) + ")");
   std::ostringstream s;
@@ -53,8 +66,10 @@ void parse(const std::string& text, bool json, const std::string& name,
     opts.ignore_unknown_fields = false;
     const auto st = google::protobuf::util::JsonStringToMessage(text, &msg, opts);
     if (!st.ok()) {
-      throw DocumentError(name + ": not a valid " + msg.GetTypeName() +
-                          " in JSON: " + std::string(st.message()));
+      throw DocumentError(common::Diagnostic{
+          name,
+          "not a valid " + msg.GetTypeName() + " in JSON: " + bounded(std::string(st.message())),
+          ""});
     }
     return;
   }
@@ -62,9 +77,8 @@ void parse(const std::string& text, bool json, const std::string& name,
   google::protobuf::TextFormat::Parser parser;
   parser.RecordErrorsTo(&errors);
   if (!parser.ParseFromString(text, &msg)) {
-    std::string e = errors.text();
-    if (!e.empty() && e.back() == '\n') e.pop_back();
-    throw DocumentError(e.empty() ? name + ": not a valid " + msg.GetTypeName() : e);
+    if (errors.problems().empty()) errors.problems().add(name, "not a valid " + msg.GetTypeName());
+    throw DocumentError(std::move(errors.problems()));
   }
 }
 

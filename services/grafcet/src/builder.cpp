@@ -17,11 +17,17 @@ namespace smc::grafcet {
 using detail::Ast;
 using detail::Node;
 
-std::string Diagnostic::str() const {
-  std::string s = file;
-  if (where.line != 0) s += ":" + std::to_string(where.line) + ":" + std::to_string(where.column);
-  return s + ": error: " + message;
+Diagnostic::Diagnostic(std::string file_name, SourceLocation at, std::string what)
+    : file(std::move(file_name)), location(at) {
+  constexpr std::size_t kMaxMessage = 240;
+  where = file;
+  if (at.line != 0) where += ":" + std::to_string(at.line) + ":" + std::to_string(at.column);
+  message = what.size() <= kMaxMessage
+                ? std::move(what)
+                : what.substr(0, kMaxMessage) + "…(" + std::to_string(what.size()) + " bytes)";
 }
+
+std::string Diagnostic::str() const { return where + ": error: " + message; }
 
 namespace {
 
@@ -461,11 +467,18 @@ ParseResult parse(std::string_view text, std::string_view file) {
   for (detail::LexError& e : syntax)
     result.errors.push_back({std::string(file), e.where, std::move(e.message)});
   std::optional<Grafcet> g = GrafcetBuilder(draft, std::string(file), result.errors).build();
-  std::stable_sort(result.errors.begin(), result.errors.end(),
-                   [](const Diagnostic& a, const Diagnostic& b) {
-                     return a.where.line != b.where.line ? a.where.line < b.where.line
-                                                         : a.where.column < b.where.column;
-                   });
+  std::stable_sort(
+      result.errors.begin(), result.errors.end(), [](const Diagnostic& a, const Diagnostic& b) {
+        return a.location.line != b.location.line ? a.location.line < b.location.line
+                                                  : a.location.column < b.location.column;
+      });
+  if (result.errors.size() > kMaxErrors) {
+    const std::size_t more = result.errors.size() - kMaxErrors;
+    result.errors.erase(result.errors.begin() + static_cast<std::ptrdiff_t>(kMaxErrors),
+                        result.errors.end());
+    result.errors.push_back(
+        {std::string(file), SourceLocation{}, "and " + std::to_string(more) + " more errors"});
+  }
   if (result.errors.empty()) result.grafcet = std::move(g);
   return result;
 }

@@ -94,9 +94,11 @@ void free_envelope(smc_data_Envelope& env) noexcept {
   env.payload._length = env.payload._maximum = 0;
 }
 
-std::optional<DocumentError> decode_envelope(const smc_data_Envelope& env, const Schema& expected,
-                                             google::protobuf::MessageLite& out) {
-  DocumentError err{DocumentFault::kWrongSchema, bounded(env.key), bounded(env.document_id), {}};
+std::optional<EnvelopeRejection> decode_envelope(const smc_data_Envelope& env,
+                                                 const Schema& expected,
+                                                 google::protobuf::MessageLite& out) {
+  EnvelopeRejection err{
+      DocumentFault::kWrongSchema, bounded(env.key), bounded(env.document_id), {}};
   const std::string where = "document '" + err.document_id + "' for '" + err.key + "': ";
   const std::string schema = bounded(env.schema);
   if (schema != expected.name) {

@@ -91,7 +91,7 @@ TEST_F(CellStoreJobs, IdsAreNeverReused) {
     FAIL() << "a job id was accepted twice";
   } catch (const JobRejected& e) {
     ASSERT_EQ(e.errors.size(), 1u);
-    EXPECT_EQ(e.errors[0].field, "job.job_id");
+    EXPECT_EQ(e.errors[0].where, "job.job_id");
     EXPECT_THAT(e.errors[0].message, HasSubstr("exists already"));
   }
   // A new connection continues the series.
@@ -106,7 +106,7 @@ TEST_F(CellStoreJobs, UnknownPartNamesTheFieldTheKnownPartsAndAFix) {
     FAIL();
   } catch (const JobRejected& e) {
     ASSERT_EQ(e.errors.size(), 1u);
-    EXPECT_EQ(e.errors[0].field, "job.part_id");
+    EXPECT_EQ(e.errors[0].where, "job.part_id");
     EXPECT_EQ(e.errors[0].message, "unknown part 'x' (known: bracket-tl, housing-js)");
     EXPECT_FALSE(e.errors[0].fix.empty());
     EXPECT_THAT(e.what(), StartsWith("job.part_id: unknown part 'x'"));
@@ -129,7 +129,7 @@ TEST_F(CellStoreJobs, EveryProblemIsReportedAtOnce) {
   j.set_job_id("bad id!");
   const auto errors = s.validate_job(j);
   std::vector<std::string> fields;
-  for (const auto& e : errors) fields.push_back(e.field);
+  for (const auto& e : errors) fields.push_back(e.where);
   EXPECT_THAT(fields, ElementsAre("job.job_id", "job.material", "job.tool_id", "job.machine_id",
                                   "job.depth_mm", "job.feedrate_mm_s", "job.spindle_rpm"));
   EXPECT_THAT(errors[1].message, HasSubstr("unknown material 'steel' (known: 6061-T6)"));
@@ -151,7 +151,7 @@ TEST_F(CellStoreJobs, MachineLimitsAreThoseOfTheRequestedMachine) {
   j.set_feedrate_mm_s(30);
   const auto errors = s.validate_job(j);
   ASSERT_EQ(errors.size(), 1u);
-  EXPECT_EQ(errors[0].field, "job.feedrate_mm_s");
+  EXPECT_EQ(errors[0].where, "job.feedrate_mm_s");
   EXPECT_THAT(errors[0].message, HasSubstr("mill-slow's maximum (20 mm/s)"));
   j.set_machine_id("");
   EXPECT_TRUE(s.validate_job(j).empty());  // mill-1 can
@@ -164,7 +164,7 @@ TEST_F(CellStoreJobs, MaterialOfAnotherPartIsRefused) {
   j.set_material("4140");
   const auto errors = s.validate_job(j);
   ASSERT_EQ(errors.size(), 1u);
-  EXPECT_EQ(errors[0].field, "job.material");
+  EXPECT_EQ(errors[0].where, "job.material");
   EXPECT_EQ(errors[0].message, "part 'bracket-tl' is made of '6061-T6', not '4140'");
 }
 

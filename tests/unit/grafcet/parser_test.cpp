@@ -184,8 +184,8 @@ void expect_errors(const std::string& text, const std::vector<Expected>& expecte
   for (const Diagnostic& d : r.errors) all += d.str() + "\n";
   ASSERT_EQ(r.errors.size(), expected.size()) << all;
   for (std::size_t i = 0; i < expected.size(); ++i) {
-    EXPECT_EQ(r.errors[i].where.line, expected[i].line) << all;
-    EXPECT_EQ(r.errors[i].where.column, expected[i].column) << all;
+    EXPECT_EQ(r.errors[i].location.line, expected[i].line) << all;
+    EXPECT_EQ(r.errors[i].location.column, expected[i].column) << all;
     EXPECT_NE(r.errors[i].message.find(expected[i].fragment), std::string::npos)
         << "message: " << r.errors[i].message << "\nexpected to contain: " << expected[i].fragment;
     EXPECT_EQ(r.errors[i].file, "bad.grafcet");
@@ -310,7 +310,7 @@ TEST(GrafcetParserErrors, DiagnosticFormatAndUnreadableFile) {
             "f.grafcet:2:6: error: expected a step number after 'step', found name 'x'");
   const ParseResult missing = parse_file("/nonexistent/dir/none.grafcet");
   ASSERT_EQ(missing.errors.size(), 1u);
-  EXPECT_EQ(missing.errors[0].where.line, 0u);
+  EXPECT_EQ(missing.errors[0].location.line, 0u);
   EXPECT_EQ(missing.errors[0].str(), "/nonexistent/dir/none.grafcet: error: cannot open the file");
 }
 

@@ -153,7 +153,7 @@ TEST(WireDocuments, SchemaFromTheDescriptorAndARoundTrip) {
   std::optional<smc::config::JobAssignment> got;
   d.on(in.reader(), [&] {
     in.take([&](const std::string&, const smc::config::JobAssignment& a) { got = a; },
-            [](const DocumentError& e) { ADD_FAILURE() << e.message; });
+            [](const EnvelopeRejection& e) { ADD_FAILURE() << e.message; });
   });
   smc::config::JobAssignment a;
   a.set_job_id("job-1");

@@ -310,14 +310,14 @@ TEST(Configuration, LateReaderGetsLastDocumentPerKeyOnly) {
   while (received.size() < 2 && std::chrono::steady_clock::now() < deadline) {
     reader.take([&](const std::string&,
                     const smc::config::SupervisorConfig& c) { received.push_back(c.config_id()); },
-                [&](const DocumentError& e) { ADD_FAILURE() << e.message; });
+                [&](const EnvelopeRejection& e) { ADD_FAILURE() << e.message; });
     std::this_thread::sleep_for(10ms);
   }
   // Give any (wrong) extra historical samples a moment to show up too.
   std::this_thread::sleep_for(200ms);
   reader.take([&](const std::string&,
                   const smc::config::SupervisorConfig& c) { received.push_back(c.config_id()); },
-              [&](const DocumentError& e) { ADD_FAILURE() << e.message; });
+              [&](const EnvelopeRejection& e) { ADD_FAILURE() << e.message; });
   std::sort(received.begin(), received.end());
   EXPECT_EQ(received, (std::vector<std::string>{"m1-v3", "m2-v3"}));
   ASSERT_NE(reader.current("m1"), nullptr);
@@ -350,11 +350,11 @@ class BadEnvelope : public ::testing::Test {
     writer_->write(env);
     free_envelope(env);
     size_t accepted = 0;
-    std::vector<DocumentError> errors;
+    std::vector<EnvelopeRejection> errors;
     const auto deadline = std::chrono::steady_clock::now() + 5s;
     while (accepted + errors.size() == 0 && std::chrono::steady_clock::now() < deadline) {
       reader_->take([&](const std::string&, const smc::config::SupervisorConfig&) { ++accepted; },
-                    [&](const DocumentError& e) { errors.push_back(e); });
+                    [&](const EnvelopeRejection& e) { errors.push_back(e); });
       std::this_thread::sleep_for(2ms);
     }
     if (!expected) {

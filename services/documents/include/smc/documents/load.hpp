@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "smc/common/diagnostic.hpp"
+
 namespace google::protobuf {
 class Message;
 }
@@ -15,8 +17,13 @@ class SupervisorConfig;
 
 namespace smc::documents {
 
-struct DocumentError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+// A document that cannot be used: every problem as a diagnostic ("path:line:col"
+// or "path" and what is wrong), at most 20 of them printed ("and K more"),
+// values quoted and cut so a huge field is never echoed whole.
+struct DocumentError : common::DiagnosticError {
+  using common::DiagnosticError::DiagnosticError;
+  explicit DocumentError(const std::string& message)
+      : common::DiagnosticError(common::Diagnostic{"", message, ""}) {}
 };
 
 // Parses `path` into `msg`. Unknown fields are errors. Throws DocumentError

@@ -34,7 +34,9 @@ const char* to_string(DocumentFault fault) noexcept;
 std::string envelope_key(const smc_data_Envelope& env);
 std::string envelope_document_id(const smc_data_Envelope& env);
 
-struct DocumentError {
+// Why an envelope was not accepted (a reader's on_reject gets it; not an
+// exception: a bad document from the network is expected input).
+struct EnvelopeRejection {
   DocumentFault fault;
   std::string key;  // the envelope's key (machine id or job id)
   std::string document_id;
@@ -55,8 +57,9 @@ void free_envelope(smc_data_Envelope& env) noexcept;
 
 // Checks schema, version, size and checksum, then parses into `out`.
 // Returns the fault, or nullopt when `out` holds the document.
-std::optional<DocumentError> decode_envelope(const smc_data_Envelope& env, const Schema& expected,
-                                             google::protobuf::MessageLite& out);
+std::optional<EnvelopeRejection> decode_envelope(const smc_data_Envelope& env,
+                                                 const Schema& expected,
+                                                 google::protobuf::MessageLite& out);
 
 // Publishes documents of one schema on one topic, keyed (machine id or job id).
 class DocumentWriter {
@@ -81,7 +84,7 @@ class DocumentReader {
       : reader_(topic), schema_(std::move(schema)) {}
 
   // on_accept(const std::string& key, const M& doc) for each good one;
-  // on_reject(const DocumentError&) for each bad one. An optional validator
+  // on_reject(const EnvelopeRejection&) for each bad one. An optional validator
   // (returns an empty string when fine) turns semantic faults into kInvalid.
   template <class Accept, class Reject>
   size_t take(Accept&& on_accept, Reject&& on_reject) {
@@ -100,7 +103,7 @@ class DocumentReader {
       std::string why = validate(doc);
       std::string key = envelope_key(env);
       if (!why.empty()) {
-        on_reject(DocumentError{DocumentFault::kInvalid, key, envelope_document_id(env), why});
+        on_reject(EnvelopeRejection{DocumentFault::kInvalid, key, envelope_document_id(env), why});
         return;
       }
       ++accepted;

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "smc/cell/store/entities.hpp"
+#include "smc/common/diagnostic.hpp"
 
 namespace smc::cell::store {
 
@@ -15,8 +16,8 @@ class Store;
 // problem per line, each starting with the path: "path:line:col: ..." for a
 // parse error, "path: job.part_id: unknown part 'x' (known: ...); fix: ..."
 // for a job the catalog refuses.
-struct JobFileError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+struct JobFileError : common::DiagnosticError {
+  using common::DiagnosticError::DiagnosticError;
 };
 
 smc::config::Job load_job_file(const std::string& path);

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "smc/cell/store/entities.hpp"
+#include "smc/common/diagnostic.hpp"
 
 struct sqlite3;
 
@@ -30,14 +31,11 @@ struct StoreError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// One problem with a job: "job.part_id", "unknown part 'x' (known: a, b)",
-// "use one of the known part ids, or add the part to the database".
-struct FieldError {
-  std::string field;
-  std::string message;
-  std::string fix;
-  std::string str() const;  // "job.part_id: unknown part 'x' (...); fix: ..."
-};
+// One problem with a job, as the project's diagnostic: where = the field
+// ("job.part_id"), message ("unknown part 'x' (known: a, b)"), fix ("use one
+// of the known part ids, or add the part to the database"); str() is
+// "job.part_id: unknown part 'x' (...); fix: ...".
+using FieldError = common::Diagnostic;
 
 // A job refused by submit_job; nothing was written. what() is every
 // FieldError, one per line.
