@@ -107,6 +107,8 @@ std::vector<Event> CellState::on_status(const smc_data_EdgeStatus& s) {
   const std::string job = get_string(s.job_id);
   if (!job.empty()) m->job_id = job;
   events.push_back(make_event(EventKind::kStatus, id, m->status_json));
+  m->reported_config = get_string(s.config_id);
+  adopt_config(*m, m->reported_config, events);
   return events;
 }
 
@@ -204,16 +206,37 @@ std::vector<Event> CellState::on_config(const std::string& machine_id,
   Mill* m = impl_->mill(machine_id, events);
   if (m == nullptr) return events;
   ++impl_->counters.samples;
-  m->grafcet = std::move(view);
-  m->has_grafcet = true;
-  m->config_brief_json = w.take();
-  m->config_doc_json = std::move(doc);
-  events.push_back(make_event(EventKind::kConfig, machine_id, m->config_brief_json));
-  if (m->situation) {  // step numbers and input names may have changed
-    m->situation_json = impl_->render_situation(*m);
-    events.push_back(make_event(EventKind::kSituation, machine_id, m->situation_json));
+  constexpr std::size_t kCandidates = 4;
+  auto& cand = m->candidates[c.config_id()];
+  cand = Mill::Candidate{std::move(view), w.take(), std::move(doc), ++m->candidate_order};
+  while (m->candidates.size() > kCandidates) {  // forget the oldest
+    auto oldest = m->candidates.begin();
+    for (auto it = m->candidates.begin(); it != m->candidates.end(); ++it) {
+      if (it->second.order < oldest->second.order) oldest = it;
+    }
+    m->candidates.erase(oldest);
   }
+  // In force only once the edge says so (it may already have: statuses and
+  // documents arrive in any order).
+  if (c.config_id() == m->config_in_force) m->config_in_force.clear();  // new content
+  adopt_config(*m, m->reported_config, events);
   return events;
+}
+
+void CellState::adopt_config(Mill& m, const std::string& config_id, std::vector<Event>& events) {
+  if (config_id.empty() || config_id == m.config_in_force) return;
+  auto it = m.candidates.find(config_id);
+  if (it == m.candidates.end()) return;  // not seen yet: adopted when it arrives
+  m.config_in_force = config_id;
+  m.grafcet = it->second.grafcet;
+  m.has_grafcet = true;
+  m.config_brief_json = it->second.brief_json;
+  m.config_doc_json = it->second.doc_json;
+  events.push_back(make_event(EventKind::kConfig, m.id, m.config_brief_json));
+  if (m.situation) {  // step numbers and input names may have changed
+    m.situation_json = impl_->render_situation(m);
+    events.push_back(make_event(EventKind::kSituation, m.id, m.situation_json));
+  }
 }
 
 std::vector<Event> CellState::on_program(const std::string& machine_id,

@@ -87,6 +87,9 @@ class CellState {
   struct Mill;
   struct Job;
   struct Impl;
+  // Makes `config_id` the mill's configuration in force, if its document has
+  // been seen (caller holds the lock).
+  void adopt_config(Mill& m, const std::string& config_id, std::vector<Event>& events);
   std::unique_ptr<Impl> impl_;
 };
 

@@ -109,8 +109,22 @@ struct CellState::Mill {
   std::string situation_json;
   std::optional<SituationRaw> situation;
   std::string program_json;
+  // The configuration in force: the one the edge's status names, never
+  // merely the last one the cell published (the edge may have refused it).
   std::string config_brief_json;  // with the Grafcet model
   std::string config_doc_json;    // the whole SupervisorConfig (Protobuf JSON mapping)
+  std::string config_in_force;    // its id (adopted)
+  std::string reported_config;    // the id the edge's status names
+  // Configurations published for this mill, by id, until the edge reports
+  // one in force (kept: the last few).
+  struct Candidate {
+    GrafcetView grafcet;
+    std::string brief_json;
+    std::string doc_json;
+    std::uint64_t order = 0;
+  };
+  std::map<std::string, Candidate> candidates;
+  std::uint64_t candidate_order = 0;
   GrafcetView grafcet;
   bool has_grafcet = false;
   std::deque<SummaryPoint> history;
@@ -219,6 +233,8 @@ struct CellState::Impl {
         .field("loop_overruns", s->loop_overruns)
         .field("loop_latency_p99_us", s->loop_latency_p99_us)
         .field("message", get_string(s->message))
+        .field("refused_config_id", get_string(s->refused_config_id))
+        .field("refusal", get_string(s->refusal))
         .end_object();
     return w.take();
   }

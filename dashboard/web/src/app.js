@@ -511,7 +511,12 @@ function millView(id) {
         fact('pass', s ? `${Math.min(s.pass_index + 1, s.pass_count)} / ${s.pass_count}` : '-'),
         fact('contact', s ? (s.in_contact ? 'yes' : 'no') : '-'),
         fact('machine time', s ? formatMachineTime(s.t, 2) : '-'),
-        fact('config', mm.config?.config_id ?? '-'));
+        fact('config in force', mm.config?.config_id ?? '-'),
+        ...(mm.status?.refused_config_id
+          ? [h('div', { class: 'fact refused', title: mm.status.refusal },
+              h('span', { class: 'muted' }, 'last refused '),
+              h('span', { class: 'strong' }, mm.status.refused_config_id), ': ', mm.status.refusal)]
+          : []));
       for (const b of root.querySelectorAll('.controls button')) {
         b.disabled = !store.session.can_command || !mm.online;
         b.title = store.session.can_command ? '' : 'sign in with an operator token to send commands';

@@ -14,7 +14,11 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <string>
@@ -68,6 +72,39 @@ struct RunningJob {
   std::chrono::steady_clock::time_point last_progress{};
 };
 
+// The intake thread: checks one configuration at a time, the newest first
+// (a configuration superseded while waiting is never checked), and hands
+// each verdict back. Not real-time; never touches DDS.
+class ConfigIntake {
+ public:
+  struct Verdict {
+    smc::config::SupervisorConfig config;  // as checked (with the mill's own model)
+    std::string why;                       // empty: accepted
+  };
+  using Check = std::function<std::string(smc::config::SupervisorConfig&)>;
+  // `checked` runs on the intake thread after each verdict (to wake the comms thread).
+  ConfigIntake(Check check, std::function<void()> checked);
+  ~ConfigIntake();
+  ConfigIntake(const ConfigIntake&) = delete;
+  ConfigIntake& operator=(const ConfigIntake&) = delete;
+
+  void submit(smc::config::SupervisorConfig cfg);  // replaces one still waiting
+  std::deque<Verdict> take_verdicts();
+  bool idle() const;  // nothing waiting or being checked
+
+ private:
+  void run();
+  Check check_;
+  std::function<void()> checked_;
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::optional<smc::config::SupervisorConfig> waiting_;
+  std::deque<Verdict> verdicts_;
+  bool busy_ = false;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
 struct EdgeService::Impl {
   explicit Impl(ServiceOptions o);
   int run(const std::atomic<bool>& stop);
@@ -114,6 +151,8 @@ struct EdgeService::Impl {
   std::optional<smc_data_ChatterEvent> pending_chatter;
   std::chrono::steady_clock::time_point pending_since{};
   std::chrono::steady_clock::time_point last_status{};
+  std::string refused_config_id;  // the last configuration refused ...
+  std::string refusal;            // ... and why, whole, on one line
 
   // service.cpp: the job's life and the loop's rings, on every wake-up.
   void supervise_job();
@@ -125,7 +164,11 @@ struct EdgeService::Impl {
   // ---- status.cpp
   void publish_status();
   void set_state(smc_data_EdgeState s, std::string why);
-  // ---- config_intake.cpp
+  // ---- config_intake.cpp: decoded on the comms thread, checked on the
+  // intake thread (parsing, validation and the Grafcet's verification never
+  // hold up operator commands), applied back on the comms thread.
+  void apply_checked_configs();
+  void refuse(const std::string& config_id, const std::string& why);
   // The mill's own model (--mill-model) machines the job's part: the
   // configuration's cutter and part geometry, the mill's cutting law and
   // structure. Without --mill-model the configuration's model is used.
@@ -147,6 +190,9 @@ struct EdgeService::Impl {
   // ---- telemetry.cpp
   void drain();
   void on_event(const EdgeEvent& e);
+
+  // Last member: destroyed (its thread stopped) before everything it uses.
+  std::unique_ptr<ConfigIntake> intake;
 };
 
 }  // namespace smc::edge

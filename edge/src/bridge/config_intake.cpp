@@ -2,8 +2,66 @@
 
 #include "bridge.hpp"
 #include "smc/documents/load.hpp"
+#include "smc/wire/limits.hpp"
 
 namespace smc::edge {
+
+// ------------------------------------------------------ the intake thread --
+
+ConfigIntake::ConfigIntake(Check check, std::function<void()> checked)
+    : check_(std::move(check)), checked_(std::move(checked)), thread_([this] { run(); }) {}
+
+ConfigIntake::~ConfigIntake() {
+  {
+    std::lock_guard lock(mu_);
+    stop_ = true;
+  }
+  cv_.notify_all();
+  thread_.join();
+}
+
+void ConfigIntake::submit(smc::config::SupervisorConfig cfg) {
+  {
+    std::lock_guard lock(mu_);
+    waiting_ = std::move(cfg);
+  }
+  cv_.notify_all();
+}
+
+std::deque<ConfigIntake::Verdict> ConfigIntake::take_verdicts() {
+  std::lock_guard lock(mu_);
+  return std::exchange(verdicts_, {});
+}
+
+bool ConfigIntake::idle() const {
+  std::lock_guard lock(mu_);
+  return !waiting_ && !busy_;
+}
+
+void ConfigIntake::run() {
+  std::unique_lock lock(mu_);
+  while (true) {
+    cv_.wait(lock, [&] { return stop_ || waiting_.has_value(); });
+    if (stop_) return;
+    Verdict v{std::move(*waiting_), {}};
+    waiting_.reset();
+    busy_ = true;
+    lock.unlock();
+    try {
+      v.why = check_(v.config);
+    } catch (const std::exception& e) {
+      v.why = e.what();
+    }
+    lock.lock();
+    busy_ = false;
+    verdicts_.push_back(std::move(v));
+    lock.unlock();
+    checked_();
+    lock.lock();
+  }
+}
+
+// ------------------------------------------------------- the comms side --
 
 void EdgeService::Impl::use_mill_model(smc::config::SupervisorConfig& cfg) const {
   if (opt.mill_model_file.empty()) return;
@@ -15,6 +73,7 @@ void EdgeService::Impl::use_mill_model(smc::config::SupervisorConfig& cfg) const
   *cfg.mutable_milling_model() = own;
 }
 
+// Runs on the intake thread: reads only `opt` (fixed) and its argument.
 std::string EdgeService::Impl::check(smc::config::SupervisorConfig& cfg) {
   if (cfg.machine().machine_id() != opt.machine_id) {
     return "supervisor_config.machine.machine_id: '" + cfg.machine().machine_id() +
@@ -30,35 +89,55 @@ std::string EdgeService::Impl::check(smc::config::SupervisorConfig& cfg) {
   return {};
 }
 
+void EdgeService::Impl::refuse(const std::string& config_id, const std::string& why) {
+  spdlog::error("{}: configuration '{}' refused: {}", opt.machine_id, config_id, why);
+  // One line, whole up to the field's size (every problem, "; " between them).
+  std::string line;
+  for (char c : why) {
+    if (c == '\n') {
+      line += "; ";
+    } else if (c != '\r') {
+      line += c;
+    }
+  }
+  if (line.size() > smc::wire::kRefusalMax) {
+    line.resize(smc::wire::kRefusalMax - 3);
+    line += "...";
+  }
+  refused_config_id = config_id;
+  refusal = line;
+  message = "configuration '" + config_id + "' refused (reason on refusal)";
+  publish_status();
+}
+
 void EdgeService::Impl::take_configs() {
   config_reader.take(
       [&](const std::string& key, const smc::config::SupervisorConfig& doc) {
         if (key != opt.machine_id) return;
-        smc::config::SupervisorConfig cfg = doc;
-        const std::string why = check(cfg);
-        if (!why.empty()) {
-          spdlog::error("{}: configuration '{}' rejected: {}", opt.machine_id, cfg.config_id(),
-                        why);
-          message = "configuration '" + cfg.config_id() + "' rejected: " + why.substr(0, 90);
-          publish_status();
-          return;
-        }
-        if (job) {
-          pending = cfg;
-          spdlog::info("{}: configuration '{}' accepted; in force after job {}", opt.machine_id,
-                       cfg.config_id(), job->assignment.job_id());
-          return;
-        }
-        config = cfg;
-        set_state(smc_data_EDGE_CONFIGURED, "configuration '" + cfg.config_id() + "' in force");
+        intake->submit(doc);  // checked off this thread; the verdict comes back
       },
       [&](const tr::EnvelopeRejection& e) {
         if (e.key != opt.machine_id) return;
-        spdlog::error("{}: configuration rejected: {}", opt.machine_id, e.message);
-        message = std::string("configuration rejected (") + tr::to_string(e.fault) +
-                  "): " + e.message.substr(0, 80);
-        publish_status();
+        refuse(e.document_id, std::string("envelope ") + tr::to_string(e.fault) + ": " + e.message);
       });
+}
+
+void EdgeService::Impl::apply_checked_configs() {
+  for (auto& v : intake->take_verdicts()) {
+    smc::config::SupervisorConfig& cfg = v.config;
+    if (!v.why.empty()) {
+      refuse(cfg.config_id(), v.why);
+      continue;
+    }
+    if (job) {
+      pending = cfg;
+      spdlog::info("{}: configuration '{}' accepted; in force after job {}", opt.machine_id,
+                   cfg.config_id(), job->assignment.job_id());
+      continue;
+    }
+    config = cfg;
+    set_state(smc_data_EDGE_CONFIGURED, "configuration '" + cfg.config_id() + "' in force");
+  }
 }
 
 }  // namespace smc::edge

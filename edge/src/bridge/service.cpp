@@ -26,13 +26,17 @@ EdgeService::Impl::Impl(ServiceOptions o)
       progress_topic(participant),
       progress_writer(progress_topic),
       program_writer(participant),
-      dispatcher(participant) {
+      dispatcher(participant),
+      intake(std::make_unique<ConfigIntake>(
+          [this](smc::config::SupervisorConfig& cfg) { return check(cfg); },
+          [this] { dispatcher.wake(); })) {
   load_journal();
   using P = tr::Dispatcher::Priority;
   // Operator commands first: served before any other reader on every wake-up.
   dispatcher.on(
       command_reader, [this] { take_commands(); }, P::kFirst);
   dispatcher.on(config_reader.reader(), [this] { take_configs(); });
+  dispatcher.poll([this] { apply_checked_configs(); });
   dispatcher.on(job_reader.reader(), [this] { take_jobs(); });
   // The loop's rings and the job's life, on every wake-up (at least every 10 ms).
   dispatcher.poll([this] { supervise_job(); }, P::kLast);

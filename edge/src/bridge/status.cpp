@@ -21,6 +21,8 @@ void EdgeService::Impl::publish_status() {
                                   .count());
   }
   set_string(st.message, message);
+  set_string(st.refused_config_id, refused_config_id);
+  set_string(st.refusal, refusal);
   status_writer.write(st);
   last_status = std::chrono::steady_clock::now();
 }

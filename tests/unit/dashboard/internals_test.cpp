@@ -123,13 +123,51 @@ TEST(CellState, SituationsBeforeTheirConfigAreRenderedAgainWithStepNumbers) {
   EXPECT_NE(ev[1].frame->find(R"("feed_hold":true)"), std::string::npos);
 
   smc::config::SupervisorConfig c;
+  c.set_config_id("c1");
   c.set_grafcet_text(read_text(std::string(SMC_SOURCE_DIR) + "/cell/grafcets/smc2.grafcet"));
   ev = state.on_config("m1", c);
-  ASSERT_EQ(ev.size(), 2u);
-  EXPECT_EQ(ev[1].kind, smc::dashboard::EventKind::kSituation);
-  EXPECT_NE(ev[1].frame->find(R"("active_steps":[4])"), std::string::npos) << *ev[1].frame;
-  EXPECT_EQ(ev[1].frame->rfind("event: situation\ndata: {", 0), 0u);
-  EXPECT_EQ(ev[1].frame->substr(ev[1].frame->size() - 2), "\n\n");
+  EXPECT_TRUE(ev.empty());  // published, not yet in force
+  smc_data_EdgeStatus st{};
+  smc::wire::set_string(st.machine_id, "m1");
+  smc::wire::set_string(st.config_id, "c1");
+  ev = state.on_status(st);
+  ASSERT_EQ(ev.size(), 3u);  // the status, the configuration in force, the situation again
+  EXPECT_EQ(ev[1].kind, smc::dashboard::EventKind::kConfig);
+  EXPECT_EQ(ev[2].kind, smc::dashboard::EventKind::kSituation);
+  EXPECT_NE(ev[2].frame->find(R"("active_steps":[4])"), std::string::npos) << *ev[2].frame;
+  EXPECT_EQ(ev[2].frame->rfind("event: situation\ndata: {", 0), 0u);
+  EXPECT_EQ(ev[2].frame->substr(ev[2].frame->size() - 2), "\n\n");
+}
+
+TEST(CellState, ARefusedConfigurationIsShownApartFromTheOneInForce) {
+  smc::dashboard::CellState state;
+  smc::config::SupervisorConfig good, bad;
+  good.set_config_id("good");
+  good.set_grafcet_text(read_text(std::string(SMC_SOURCE_DIR) + "/cell/grafcets/smc2.grafcet"));
+  bad.set_config_id("bad");
+  bad.set_grafcet_text("garbage");
+  smc_data_EdgeStatus st{};
+  smc::wire::set_string(st.machine_id, "m1");
+  smc::wire::set_string(st.config_id, "good");
+  // The edge reports the good one in force before its document reaches us.
+  (void)state.on_status(st);
+  (void)state.on_config("m1", good);
+  ASSERT_TRUE(state.config_json("m1").has_value());
+  EXPECT_NE(state.config_json("m1")->find("good"), std::string::npos);
+  // The cell publishes a bad one; the edge refuses it and keeps the good one.
+  (void)state.on_config("m1", bad);
+  const std::string reason(600, 'r');
+  smc::wire::set_string(st.refused_config_id, "bad");
+  smc::wire::set_string(st.refusal, reason);
+  (void)state.on_status(st);
+  const auto cfg = state.config_json("m1");
+  ASSERT_TRUE(cfg.has_value());
+  EXPECT_NE(cfg->find("\"good\""), std::string::npos) << *cfg;
+  EXPECT_EQ(cfg->find("\"bad\""), std::string::npos) << *cfg;
+  const auto mill = state.mill_json("m1");
+  ASSERT_TRUE(mill.has_value());
+  EXPECT_NE(mill->find(R"("refused_config_id":"bad")"), std::string::npos) << *mill;
+  EXPECT_NE(mill->find(reason), std::string::npos) << "the whole reason, not cut at 90";
 }
 
 TEST(CellState, ForgetsFinishedJobsFirstPastTheLimit) {

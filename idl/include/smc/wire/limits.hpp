@@ -21,6 +21,7 @@ inline constexpr std::size_t kConfigIdMax = sizeof(smc_data_EdgeStatus{}.config_
 inline constexpr std::size_t kDocumentKeyMax = sizeof(smc_data_Envelope{}.key) - 1;          // 63
 inline constexpr std::size_t kDocumentIdMax = sizeof(smc_data_Envelope{}.document_id) - 1;   // 63
 inline constexpr std::size_t kStatusMessageMax = sizeof(smc_data_EdgeStatus{}.message) - 1;  // 127
+inline constexpr std::size_t kRefusalMax = sizeof(smc_data_EdgeStatus{}.refusal) - 1;        // 1023
 // Raw force samples per ForceBatch (IDL BATCH_MAX).
 inline constexpr int kForceBatchMax = smc_data_BATCH_MAX;
 
