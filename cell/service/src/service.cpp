@@ -1,9 +1,13 @@
 #include "smc/cell/service.hpp"
 
+#include <fcntl.h>
 #include <spdlog/spdlog.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <optional>
 #include <set>
@@ -20,6 +24,7 @@
 #include "smc/transport/dispatcher.hpp"
 #include "smc/transport/participant.hpp"
 #include "smc/wire/documents.hpp"
+#include "smc/wire/limits.hpp"
 #include "smc/wire/topics.hpp"
 
 namespace smc::cell {
@@ -32,9 +37,47 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
+// "<job>-a<attempt>" must fit the wire's config id (and the job id its key).
+static_assert(store::kMaxJobIdLength + 12 <= smc::wire::kConfigIdMax);
+static_assert(store::kMaxJobIdLength <= smc::wire::kDocumentKeyMax);
+
 std::string config_id_for(const store::Job& j, uint32_t attempt) {
   return j.id + "-a" + std::to_string(attempt);
 }
+
+// One cell per database: an exclusive lock on "<db>.lock", held for the
+// service's life. The kernel releases it when the process ends, however it
+// ends, so a crash never leaves a stale lock behind.
+class DatabaseLock {
+ public:
+  explicit DatabaseLock(const std::string& db_path) : path_(db_path + ".lock") {
+    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) {
+      throw store::StoreError(path_ + ": cannot open the cell's lock file (" +
+                              std::strerror(errno) + ")");
+    }
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      char holder[32] = {};
+      const ssize_t n = ::pread(fd_, holder, sizeof holder - 1, 0);
+      ::close(fd_);
+      std::string pid = n > 0 ? std::string(holder, static_cast<size_t>(n)) : "";
+      while (!pid.empty() && (pid.back() == '\n' || pid.back() == ' ')) pid.pop_back();
+      throw store::StoreError(db_path + ": another smc-cell serve" +
+                              (pid.empty() ? "" : " (pid " + pid + ")") +
+                              " is using this database; fix: stop it first, or give this one "
+                              "another --db");
+    }
+    const std::string pid = std::to_string(::getpid()) + "\n";
+    if (::ftruncate(fd_, 0) == 0) (void)!::pwrite(fd_, pid.data(), pid.size(), 0);
+  }
+  ~DatabaseLock() { ::close(fd_); }
+  DatabaseLock(const DatabaseLock&) = delete;
+  DatabaseLock& operator=(const DatabaseLock&) = delete;
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
 
 struct Mill {
   bool alive = false;
@@ -53,6 +96,7 @@ struct Progress {
 
 struct CellService::Impl {
   ServiceOptions opt;
+  DatabaseLock lock;  // before the database is opened
   store::Store db;
   Planner planner;
   tr::Participant participant;
@@ -73,12 +117,14 @@ struct CellService::Impl {
   std::map<std::string, Progress> progress;                             // by job id
   std::map<std::string, std::vector<machining::ForceSample>> learning;  // by job id
   std::set<uint64_t> chatter_seen;
+  std::map<std::string, std::string> out_on;  // machine -> job whose assignment was sent
   int64_t data_version = -1;
   Clock::time_point started = Clock::now();
   Clock::time_point last_scan{};
 
   explicit Impl(ServiceOptions o)
       : opt(std::move(o)),
+        lock(opt.db_path),
         db(store::Store::open(opt.db_path, store::OpenMode::kExisting)),
         planner(opt.grafcet_dir, load_defaults(opt.defaults_file)),
         participant({.domain_id = opt.domain_id, .partition = opt.partition}),
@@ -135,7 +181,11 @@ struct CellService::Impl {
     if (j.result) *st.mutable_result() = *j.result;
     st.set_updated_unix_ms(smc::unix_time_ms());
     st.set_reason(reason);
-    status_doc_writer.publish(j.id, j.id, st);
+    try {
+      status_doc_writer.publish(j.id, j.id, st);
+    } catch (const std::exception& e) {  // one bad record never stops the cell
+      spdlog::error("job {}: its status cannot be published: {}", j.id, e.what());
+    }
   }
 
   bool move(const store::Job& j, cfg::JobState to, const std::string& reason,
@@ -161,6 +211,24 @@ struct CellService::Impl {
     a.set_config_id(c.config_id());
     a.set_attempt(attempt);
     job_writer.publish(m.id, j.id, a);
+    out_on[m.id] = j.id;
+  }
+
+  // An assignment whose job left assigned/running behind the cell's back
+  // (smc-cell job cancel) is withdrawn from its mill.
+  void withdraw_stale_assignments() {
+    for (auto it = out_on.begin(); it != out_on.end();) {
+      const auto j = db.job(it->second);
+      if (j && (j->state == cfg::JOB_ASSIGNED || j->state == cfg::JOB_RUNNING) &&
+          j->machine_id == it->first) {
+        ++it;
+        continue;
+      }
+      spdlog::info("{}: assignment of job {} withdrawn ({})", it->first, it->second,
+                   j ? std::string(store::state_name(j->state)) : "no such job");
+      withdraw(it->first);
+      it = out_on.erase(it);
+    }
   }
 
   // ---------------------------------------------------------- planning --
@@ -224,12 +292,35 @@ struct CellService::Impl {
                 "dispatched to " + a.machine_id + " (attempt " + std::to_string(a.attempt) + ")",
                 a.machine_id))
         continue;
-      send(*db.job(a.job_id), *m, a.attempt);
+      try {
+        send(*db.job(a.job_id), *m, a.attempt);
+      } catch (const std::exception& e) {
+        fail_unsendable(a.job_id, e.what());
+      }
     }
   }
 
   // On start-up: jobs the database says are out on mills get their
   // configuration and assignment again (an edge ignores what it already ran).
+  // A job whose configuration or assignment cannot be sent (a record the
+  // wire cannot carry) fails with the reason; the cell goes on.
+  void fail_unsendable(const std::string& job_id, const std::string& why) {
+    spdlog::error("job {}: cannot be sent to its mill: {}", job_id, why);
+    try {
+      auto j = db.job(job_id);
+      if (!j) return;
+      if (j->state == cfg::JOB_ASSIGNED || j->state == cfg::JOB_RUNNING) {
+        withdraw(j->machine_id);
+        if (move(*j, cfg::JOB_INTERRUPTED, "cannot be sent: " + why)) j = db.job(job_id);
+      }
+      if (j && !store::is_terminal(j->state)) {
+        move(*j, cfg::JOB_FAILED, "cannot be sent: " + why);
+      }
+    } catch (const std::exception& e) {
+      spdlog::error("job {}: cannot be marked failed either: {}", job_id, e.what());
+    }
+  }
+
   void resume() {
     for (auto s : {cfg::JOB_ASSIGNED, cfg::JOB_RUNNING}) {
       for (const auto& j : db.jobs({.state = s, .with_documents = true})) {
@@ -237,7 +328,11 @@ struct CellService::Impl {
         if (!m || !j.plan) continue;
         spdlog::info("job {}: resuming as {} on {}", j.id, store::state_name(j.state),
                      j.machine_id);
-        send(j, *m, j.attempt);
+        try {
+          send(j, *m, j.attempt);
+        } catch (const std::exception& e) {
+          fail_unsendable(j.id, e.what());
+        }
       }
     }
   }
@@ -449,6 +544,7 @@ struct CellService::Impl {
           if (!progress.count(j.id)) publish_status(j, "queued");
         }
         plan_queued();
+        withdraw_stale_assignments();
       }
       check_lost_edges();
       dispatch();

@@ -82,7 +82,7 @@ void print_job(const store::Job& j, const std::vector<store::JobEvent>& events) 
 }  // namespace
 
 SMC_CELL_COMMAND(job, 20) {
-  auto* job = app.add_subcommand("job", "Jobs: submit a job file, list jobs, show one");
+  auto* job = app.add_subcommand("job", "Jobs: submit a job file, list jobs, show one, cancel one");
   job->require_subcommand(1);
 
   struct SubmitArgs {
@@ -161,5 +161,44 @@ SMC_CELL_COMMAND(job, 20) {
                            "; fix: see the ids with 'smc-cell job list --db " + s.path() + "'");
     }
     print_job(*j, s.events(j->id));
+  });
+
+  struct CancelArgs {
+    std::string id;
+    std::string db;
+    std::string reason;
+  };
+  auto cancel_args = std::make_shared<CancelArgs>();
+  auto* cancel = job->add_subcommand(
+      "cancel",
+      "Cancel a queued, planned or assigned job: it fails with the reason (an assigned one is "
+      "interrupted first, and a running cell withdraws it from its mill). A running job is "
+      "stopped at the mill (feed hold), not here");
+  cancel->add_option("ID", cancel_args->id, "Job id, e.g. job-000001")->required();
+  cancel->add_option("--reason", cancel_args->reason, "Why, for the job's history")->required();
+  add_db_option(cancel, cancel_args->db);
+  cancel->callback([cancel_args] {
+    store::Store s = store::Store::open(cancel_args->db, store::OpenMode::kExisting);
+    auto j = s.job(cancel_args->id);
+    if (!j) {
+      throw Failure(2, "unknown job '" + cancel_args->id + "' in " + s.path() +
+                           "; fix: see the ids with 'smc-cell job list --db " + s.path() + "'");
+    }
+    const std::string why = "cancelled: " + cancel_args->reason;
+    if (j->state == smc::config::JOB_ASSIGNED) {
+      if (!s.transition(j->id, j->state, smc::config::JOB_INTERRUPTED, why)) {
+        throw Failure(1, j->id + " changed state meanwhile; look again with 'smc-cell job show'");
+      }
+      j = s.job(j->id);
+    }
+    if (j->state != smc::config::JOB_QUEUED && j->state != smc::config::JOB_PLANNED &&
+        j->state != smc::config::JOB_INTERRUPTED) {
+      throw Failure(2, j->id + " is " + std::string(store::state_name(j->state)) +
+                           "; only queued, planned and assigned jobs can be cancelled");
+    }
+    if (!s.transition(j->id, j->state, smc::config::JOB_FAILED, why)) {
+      throw Failure(1, j->id + " changed state meanwhile; look again with 'smc-cell job show'");
+    }
+    std::printf("%s cancelled (%s)\n", j->id.c_str(), cancel_args->reason.c_str());
   });
 }

@@ -32,7 +32,7 @@ std::string list(const std::vector<std::string>& items) {
 }
 
 bool valid_job_id(const std::string& id) {
-  if (id.empty() || id.size() > 64) return false;
+  if (id.empty() || id.size() > kMaxJobIdLength) return false;
   const auto ok = [](char c, bool first) {
     const bool alnum = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9');
     return alnum || (!first && (c == '-' || c == '_' || c == '.'));
@@ -84,9 +84,14 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
 
   if (!job.job_id().empty()) {
     if (!valid_job_id(job.job_id())) {
-      errors.push_back({"job.job_id", "'" + job.job_id() + "' is not a valid job id",
-                        "use 1 to 64 letters, digits, '-', '_' or '.', starting with a letter or "
-                        "digit, or leave job_id out for the cell to assign one"});
+      errors.push_back({"job.job_id",
+                        common::quote(job.job_id()) + " is not a valid job id" +
+                            (job.job_id().size() > kMaxJobIdLength
+                                 ? " (" + std::to_string(job.job_id().size()) + " characters)"
+                                 : ""),
+                        "use 1 to " + std::to_string(kMaxJobIdLength) +
+                            " letters, digits, '-', '_' or '.', starting with a letter or "
+                            "digit, or leave job_id out for the cell to assign one"});
     } else if (store.job(job.job_id())) {
       errors.push_back({"job.job_id", "a job '" + job.job_id() + "' exists already",
                         "choose another job_id, or leave it out for the cell to assign one"});

@@ -106,7 +106,12 @@ void EdgeService::Impl::refuse(const std::string& config_id, const std::string& 
   }
   refused_config_id = config_id;
   refusal = line;
-  message = "configuration '" + config_id + "' refused (reason on refusal)";
+  // The status message keeps its short form; the whole reason is `refusal`.
+  message = "configuration '" + config_id + "' rejected: " + line;
+  if (message.size() > smc::wire::kStatusMessageMax) {
+    message.resize(smc::wire::kStatusMessageMax - 3);
+    message += "...";
+  }
   publish_status();
 }
 

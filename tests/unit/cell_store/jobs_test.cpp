@@ -217,5 +217,28 @@ TEST_F(CellStoreJobs, MalformedFilesAnswerWithTheirPlace) {
   EXPECT_EQ(s.counts().jobs, 0);
 }
 
+// Issue: a 64-character job id was accepted, then stopped the cell at every
+// start (the wire holds 63, and "<job>-a<attempt>" must fit too).
+TEST_F(CellStoreJobs, AJobIdLongerThanTheWireCarriesIsRefusedAtSubmission) {
+  Store s = seeded();
+  auto longest = job_for("bracket-tl");
+  longest.set_job_id(std::string(kMaxJobIdLength, 'j'));
+  EXPECT_EQ(s.submit_job(longest).id.size(), kMaxJobIdLength);
+  for (const std::size_t n : {kMaxJobIdLength + 1, std::size_t{64}, std::size_t{10'000}}) {
+    auto j = job_for("bracket-tl");
+    j.set_job_id(std::string(n, 'k'));
+    try {
+      s.submit_job(j);
+      FAIL() << n << " characters accepted";
+    } catch (const JobRejected& e) {
+      ASSERT_EQ(e.errors.size(), 1u);
+      EXPECT_EQ(e.errors[0].where, "job.job_id");
+      EXPECT_THAT(e.errors[0].message, HasSubstr("(" + std::to_string(n) + " characters)"));
+      EXPECT_THAT(e.errors[0].fix, HasSubstr("use 1 to 48"));
+      EXPECT_LT(e.errors[0].message.size(), 200u) << "the value is quoted, not echoed whole";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace smc::cell::store::test

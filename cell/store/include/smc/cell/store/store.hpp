@@ -44,6 +44,11 @@ struct JobRejected : StoreError {
   std::vector<FieldError> errors;
 };
 
+// The longest job id: the job id travels in 63-character wire strings, and so
+// does its configuration's id "<job>-a<attempt>", which needs 12 more (the
+// cell service checks this against the IDL at compile time).
+inline constexpr std::size_t kMaxJobIdLength = 48;
+
 // The database the cell and its CLI use unless told otherwise:
 // $SMC_CELL_DB when set and non-empty, else "smc-cell.db" (current folder).
 std::string default_db_path();
