@@ -4,6 +4,8 @@
 // write the output.
 
 #include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -13,6 +15,7 @@
 #include "smc/grafcet/dot.hpp"
 #include "smc/grafcet/parser.hpp"
 #include "smc/grafcet/verifier.hpp"
+#include "smc/supervision/grafcet_binding.hpp"
 
 namespace {
 
@@ -39,14 +42,31 @@ SMC_CELL_COMMAND(grafcet, 30) {
   auto check_file = std::make_shared<std::string>();
   auto* check = grafcet->add_subcommand(
       "check",
-      "Explore every reachable situation under every input valuation; print the report "
-      "(unreachable steps, conflicts, deadlocks, transient cycles, invariants). Exits 1 on "
-      "any violation, 2 if the file does not parse");
+      "Explore every reachable situation under every input valuation, within a budget; print "
+      "the report (unreachable steps, conflicts, deadlocks, transient cycles, invariants, an "
+      "exhausted budget). Exits 1 on any violation, 2 if the file does not parse");
   check->add_option("FILE", *check_file, "Grafcet text file (e.g. cell/grafcets/smc2.grafcet)")
       ->required();
-  check->callback([check_file] {
+  // The same defaults as an edge's check of a configuration's Grafcet
+  // (services/supervision CheckBudget).
+  auto budget = std::make_shared<std::uint64_t>(smc::supervision::CheckBudget{}.max_work);
+  auto time_ms = std::make_shared<std::int64_t>(smc::supervision::CheckBudget{}.max_time.count());
+  check
+      ->add_option("--budget", *budget,
+                   "Work budget: evolution rounds explored before giving up with a 'budget' "
+                   "finding (deterministic; 0: none). The default is the edge's")
+      ->capture_default_str();
+  check
+      ->add_option("--time-budget-ms", *time_ms,
+                   "Wall-clock budget in ms (0: none). The default is the edge's")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  check->callback([check_file, budget, time_ms] {
     const smc::grafcet::Grafcet g = load(*check_file);
-    const smc::grafcet::Report report = smc::grafcet::verify(g);
+    smc::grafcet::VerifyOptions vo;
+    vo.max_work = *budget;
+    vo.max_time = std::chrono::milliseconds(*time_ms);
+    const smc::grafcet::Report report = smc::grafcet::verify(g, vo);
     std::fputs(smc::grafcet::format_report(g, report).c_str(), stdout);
     std::fflush(stdout);
     const std::size_t n = report.violations.size() + report.violations_dropped;

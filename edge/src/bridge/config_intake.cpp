@@ -1,4 +1,6 @@
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include "bridge.hpp"
 #include "smc/documents/load.hpp"
@@ -39,6 +41,10 @@ bool ConfigIntake::idle() const {
 }
 
 void ConfigIntake::run() {
+  // Below the loop and the comms thread: checking a configuration may take
+  // hundreds of milliseconds of CPU and must never take it from them (where
+  // the loop is not SCHED_FIFO, e.g. paced simulation).
+  (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::gettid()), 10);
   std::unique_lock lock(mu_);
   while (true) {
     cv_.wait(lock, [&] { return stop_ || waiting_.has_value(); });
