@@ -8,7 +8,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
+#include <vector>
 
 #include "smc_config.pb.h"
 
@@ -44,6 +46,62 @@ class Collector final : public google::protobuf::io::ErrorCollector {
 
 bool is_json(const std::string& path) { return std::filesystem::path(path).extension() == ".json"; }
 
+// Protobuf's JSON parser lets the last of two equal keys win silently; a
+// document with a duplicate key is refused instead, naming both places.
+// A small scan over the text: strings (with escapes), objects and arrays;
+// the key set of every open object. Malformed JSON is left to the parser.
+void check_duplicate_keys(const std::string& text, const std::string& name,
+                          common::Diagnostics& problems) {
+  struct Object {
+    std::map<std::string, std::pair<int, int>> keys;  // key -> line, column
+    bool expect_key = true;
+  };
+  std::vector<Object> open;  // objects only; arrays push a marker-less frame below
+  std::vector<char> nest;
+  int line = 1, col = 1;
+  for (std::size_t i = 0; i < text.size(); ++i, ++col) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      col = 0;
+      continue;
+    }
+    if (c == '{') {
+      nest.push_back('{');
+      open.emplace_back();
+    } else if (c == '[') {
+      nest.push_back('[');
+    } else if (c == '}' || c == ']') {
+      if (nest.empty()) return;
+      if (nest.back() == '{' && !open.empty()) open.pop_back();
+      nest.pop_back();
+    } else if (c == ',') {
+      if (!nest.empty() && nest.back() == '{' && !open.empty()) open.back().expect_key = true;
+    } else if (c == '"') {
+      const int l = line, k = col;
+      std::string s;
+      for (++i, ++col; i < text.size() && text[i] != '"'; ++i, ++col) {
+        if (text[i] == '\\' && i + 1 < text.size()) {
+          s += text[++i];
+          ++col;
+        } else {
+          s += text[i];
+        }
+      }
+      if (!nest.empty() && nest.back() == '{' && !open.empty() && open.back().expect_key) {
+        open.back().expect_key = false;
+        auto [it, fresh] = open.back().keys.emplace(s, std::pair{l, k});
+        if (!fresh) {
+          problems.add(name + ":" + std::to_string(l) + ":" + std::to_string(k),
+                       "duplicate key " + common::quote(s) + " (first at line " +
+                           std::to_string(it->second.first) + ")",
+                       "give each field once; JSON readers disagree on which copy wins");
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 
 std::string read_file(const std::string& path) {
@@ -62,6 +120,9 @@ std::string read_file(const std::string& path) {
 void parse(const std::string& text, bool json, const std::string& name,
            google::protobuf::Message& msg) {
   if (json) {
+    common::Diagnostics duplicates;
+    check_duplicate_keys(text, name, duplicates);
+    if (!duplicates.ok()) throw DocumentError(std::move(duplicates));
     google::protobuf::util::JsonParseOptions opts;
     opts.ignore_unknown_fields = false;
     const auto st = google::protobuf::util::JsonStringToMessage(text, &msg, opts);

@@ -4,6 +4,8 @@
 #include <gmock/gmock.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "smc/cell/store/job_file.hpp"
 #include "store_test_util.hpp"
@@ -15,6 +17,7 @@ using smc::config::JOB_QUEUED;
 using ::testing::AllOf;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using ::testing::StartsWith;
 
 class CellStoreJobs : public StoreTest {};
@@ -238,6 +241,33 @@ TEST_F(CellStoreJobs, AJobIdLongerThanTheWireCarriesIsRefusedAtSubmission) {
       EXPECT_LT(e.errors[0].message.size(), 200u) << "the value is quoted, not echoed whole";
     }
   }
+}
+
+// Issue: a JSON job with a duplicate key was accepted (the last won), and a
+// folder given as a job file was reported as "part_id missing".
+TEST_F(CellStoreJobs, ADuplicateJsonKeyAndAFolderAreRefusedByName) {
+  Store s = seeded();
+  const auto dup = dir_ / "dup.json";
+  {
+    std::ofstream f(dup);
+    f << "{\"part_id\": \"housing-js\",\n \"depth_mm\": 1, \"part_id\": \"bracket-tl\"}\n";
+  }
+  try {
+    submit_job_file(s, dup.string());
+    FAIL() << "a duplicate key was accepted";
+  } catch (const JobFileError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("dup.json:2:17: duplicate key 'part_id' (first at line 1)"));
+  }
+  const auto folder = dir_ / "a-folder.json";
+  std::filesystem::create_directories(folder);
+  try {
+    submit_job_file(s, folder.string());
+    FAIL() << "a folder was accepted";
+  } catch (const JobFileError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("a-folder.json: is a folder, not a document"));
+    EXPECT_THAT(e.what(), Not(HasSubstr("part_id")));
+  }
+  EXPECT_EQ(s.counts().jobs, 0);
 }
 
 }  // namespace
