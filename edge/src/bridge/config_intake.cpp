@@ -8,6 +8,9 @@
 
 namespace smc::edge {
 
+static_assert(supervision::kMaxConfigIdLength == smc::wire::kConfigIdMax);
+static_assert(supervision::kMaxConfigIdLength <= smc::wire::kDocumentIdMax);
+
 // ------------------------------------------------------ the intake thread --
 
 ConfigIntake::ConfigIntake(Check check, std::function<void()> checked)

@@ -19,6 +19,11 @@ ValidatedConfig validate(const smc::config::SupervisorConfig& cfg, ModuleMask kn
   c.config_id = cfg.config_id();
   if (c.config_id.empty()) {
     problems.add(root + "config_id", "is empty", "give the configuration a name");
+  } else if (c.config_id.size() > kMaxConfigIdLength) {
+    problems.add(root + "config_id",
+                 common::quote(c.config_id) + " is " + std::to_string(c.config_id.size()) +
+                     " characters; the wire carries " + std::to_string(kMaxConfigIdLength),
+                 "use a shorter id");
   }
   c.variant = cfg.variant();
   if (cfg.variant() == smc::config::SMC_UNSPECIFIED) {

@@ -5,6 +5,7 @@
 // then verified). Cell and edge call the same function: the cell before it
 // sends a configuration, the edge before it accepts one. Not real-time.
 
+#include <cstddef>
 #include <memory>
 #include <string>
 
@@ -32,6 +33,11 @@ struct ValidatedConfig {
   // configuration never parse or verify again).
   std::shared_ptr<const BoundGrafcet> grafcet;
 };
+
+// The longest configuration id: it travels in 63-character wire strings
+// (smc_edge_status.config_id, the envelope's document id; the edge bridge
+// checks this against the IDL at compile time).
+inline constexpr std::size_t kMaxConfigIdLength = 63;
 
 // The paper's modules, A–L.
 inline constexpr ModuleMask kPaperModules = (1u << kModuleCount) - 1;
