@@ -130,9 +130,9 @@ std::vector<std::string> validation_errors(const MillingModel& m, const std::str
     c.fail(prefix + ".structure",
            "has no modes: give at least one in tool_x, tool_y, part_x or part_y");
   }
-  if (!(std::isfinite(m.internal_step_s) && m.internal_step_s > 0 &&
+  if (!(std::isfinite(m.internal_step_s) && m.internal_step_s >= kMinInternalStepS &&
         m.internal_step_s <= kMaxInternalStepS)) {
-    c.fail(prefix + ".internal_step_s", "must be in (0, 1e-4] (0 in a document: 1e-5)",
+    c.fail(prefix + ".internal_step_s", "must be in [1e-7, 1e-4] s (0 in a document: 1e-5)",
            m.internal_step_s);
   }
   if (m.reference_cut) {

@@ -33,7 +33,12 @@ RunSetup setup_for(const MillingModel& model, double rpm, double max_step) {
   }
   const double period = tooth_period_s(rpm, model.cutter.teeth);
   const double m = std::ceil(period / bound - 1e-9);
-  if (m > 5e6) throw std::invalid_argument("spindle speed too low for a batch run");
+  if (m > 5e6) {
+    throw std::invalid_argument("a tooth period of " + detail::fmt(period) + " s (" +
+                                detail::fmt(rpm) + " rpm) is " + detail::fmt(m) +
+                                " internal steps of " + detail::fmt(bound) +
+                                " s, more than 5e6: raise the spindle speed or the internal step");
+  }
   RunSetup s;
   s.steps_per_period = std::max(1, static_cast<int>(m));
   s.step_s = period / s.steps_per_period;

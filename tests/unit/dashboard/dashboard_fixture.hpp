@@ -68,10 +68,13 @@ struct CellSide {
         configs(config_topic, schema_of(config::SupervisorConfig::default_instance())),
         jobs(job_topic, schema_of(config::JobStatus::default_instance())) {}
 
-  void status(const std::string& mill, smc_data_EdgeState state = smc_data_EDGE_RUNNING) {
+  // As an edge reports it: its state and the configuration it has in force.
+  void status(const std::string& mill, smc_data_EdgeState state = smc_data_EDGE_RUNNING,
+              const std::string& config_in_force = "cfg-1") {
     smc_data_EdgeStatus s{};
     wire::set_string(s.machine_id, mill);
     s.state = state;
+    wire::set_string(s.config_id, config_in_force);
     wire::set_string(s.message, "test");
     statuses.write(s);
   }

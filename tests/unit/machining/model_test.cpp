@@ -114,11 +114,24 @@ TEST(Validation, NonFiniteValuesAreRejected) {
   ASSERT_EQ(errors.size(), 2u);
   EXPECT_EQ(errors[0],
             "milling_model.structure.tool_y[0].natural_frequency_rad_s: must be > 0, got nan");
-  EXPECT_NE(errors[1].find("milling_model.internal_step_s: must be in (0, 1e-4]"),
+  EXPECT_NE(errors[1].find("milling_model.internal_step_s: must be in [1e-7, 1e-4] s"),
             std::string::npos);
   EXPECT_THROW(mc::validate(mc::CutConditions{0, 0.1, 1}), std::invalid_argument);
   EXPECT_THROW(mc::validate(mc::CutConditions{1500, -0.1, 1}), std::invalid_argument);
   EXPECT_NO_THROW(mc::validate(mc::CutConditions{1500, 0, 0}));
+}
+
+// Issue: a 1e-12 s step was accepted and then refused later for "spindle
+// speed too low".
+TEST(Validation, AnAbsurdlySmallInternalStepIsRefusedForWhatItIs) {
+  mc::MillingModel m = mc::paper_case();
+  m.internal_step_s = 1e-12;
+  const auto errors = mc::validation_errors(m);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("milling_model.internal_step_s: must be in [1e-7, 1e-4] s"),
+            std::string::npos)
+      << errors[0];
+  EXPECT_NE(errors[0].find("got 1e-12"), std::string::npos) << errors[0];
 }
 
 TEST(Documents, RoundTripThroughProto) {

@@ -113,6 +113,8 @@ struct ReferenceCut {
 
 inline constexpr double kDefaultInternalStepS = 1e-5;
 inline constexpr double kMaxInternalStepS = 1e-4;
+// Below this a tooth period is millions of steps: nothing to learn, only time lost.
+inline constexpr double kMinInternalStepS = 1e-7;
 
 struct MillingModel {
   std::string name;
@@ -121,7 +123,7 @@ struct MillingModel {
   CuttingLaw law;
   Structure structure;
   DelayKind delay = DelayKind::tooth_period;
-  double internal_step_s = kDefaultInternalStepS;  // (0, 1e-4]
+  double internal_step_s = kDefaultInternalStepS;  // [1e-7, 1e-4]
   Provenance provenance = Provenance::unspecified;
   bool validated = false;
   std::optional<ReferenceCut> reference_cut;
