@@ -167,7 +167,7 @@ struct DdsBridge::Impl {
       wire::set_string(cmd.operator_name, rec.request.operator_name);
       cmd.command_id = rec.command_id;
       cmd.issued_unix_ns = rec.issued_unix_ns;
-      cmd.action = wire_action(rec.request.action);
+      cmd.action = static_cast<std::int32_t>(wire_action(rec.request.action));
       try {
         commands.write(cmd);
         rec.sent = true;

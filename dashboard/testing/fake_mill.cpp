@@ -716,7 +716,7 @@ int run_fake_cell(const FakeCellOptions& options, const std::atomic<bool>& stop)
       const std::string mill = wire::get_string(c.machine_id);
       for (auto& m : mills) {
         if (m->id() != mill) continue;
-        m->command(c.action);
+        m->command(static_cast<smc_data_OperatorAction>(c.action));
         std::printf("command %s %s %s %llu\n", mill.c_str(),
                     smc::wire::operator_action_name(c.action),
                     wire::get_string(c.operator_name).c_str(),

@@ -264,3 +264,33 @@ TEST_F(Cell, InvalidConfigurationIsRejectedAndReported) {
   writer.publish("mill-1", good.config_id(), good);
   EXPECT_NE(wait_message("'good' in force").find("good"), std::string::npos);
 }
+
+// Issue: a command with an action off the enum was dropped with only a
+// deserialization line on stderr.
+TEST_F(Cell, ACommandWithAnUnknownActionIsRefusedByName) {
+  start_edge("mill-1");
+  namespace tr = smc::transport;
+  tr::Participant p({.partition = partition_});
+  tr::Topic<smc_data_OperatorCommand> cmd_topic(p);
+  tr::Writer<smc_data_OperatorCommand> cmd(cmd_topic);
+  tr::Topic<smc_data_EdgeStatus> status_topic(p);
+  tr::Reader<smc_data_EdgeStatus> status(status_topic);
+  ASSERT_TRUE(cmd.wait_for_readers(1, 20s));
+  smc_data_OperatorCommand c{};
+  smc::wire::set_string(c.machine_id, "mill-1");
+  smc::wire::set_string(c.operator_name, "mallory");
+  c.command_id = 77;
+  c.action = 7;
+  cmd.write(c);
+  const auto deadline = Clock::now() + 20s;
+  std::string last;
+  while (Clock::now() < deadline && last.find("refused") == std::string::npos) {
+    status.take([&](const smc_data_EdgeStatus& s, const tr::SampleInfo& i) {
+      if (i.valid_data) last = smc::wire::get_string(s.message);
+    });
+    std::this_thread::sleep_for(20ms);
+  }
+  EXPECT_NE(last.find("operator command 77 from 'mallory' refused: unknown action 7"),
+            std::string::npos)
+      << last;
+}

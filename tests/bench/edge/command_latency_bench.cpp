@@ -182,7 +182,7 @@ Stats run(int commands, bool hostile) {
     set_string(c.machine_id, "mill-1");
     set_string(c.operator_name, "bench");
     c.command_id = static_cast<uint64_t>(i + 1);
-    c.action = on ? smc_data_OP_FEED_HOLD_ON : smc_data_OP_FEED_HOLD_OFF;
+    c.action = static_cast<int32_t>(on ? smc_data_OP_FEED_HOLD_ON : smc_data_OP_FEED_HOLD_OFF);
     poll();
     const auto t0 = Clock::now();
     cmd.write(c);

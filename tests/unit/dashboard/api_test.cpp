@@ -170,7 +170,7 @@ TEST(DashboardApi, FeedHoldWithTokenReachesDdsUnderTheOperatorsName) {
   const auto cmds = take_commands(f.cell(), 1);
   ASSERT_EQ(cmds.size(), 1u);
   EXPECT_EQ(smc::wire::get_string(cmds[0].machine_id), "mill-t");
-  EXPECT_EQ(cmds[0].action, smc_data_OP_FEED_HOLD_ON);
+  EXPECT_EQ(cmds[0].action, static_cast<int32_t>(smc_data_OP_FEED_HOLD_ON));
   EXPECT_EQ(smc::wire::get_string(cmds[0].operator_name), "bob");
   EXPECT_EQ(std::to_string(cmds[0].command_id), field(reply, "command_id").string_value());
 
@@ -209,7 +209,7 @@ TEST(DashboardApi, CommandsWithoutAValidTokenAreRefusedAndNeverReachDds) {
             202);
   const auto cmds = take_commands(f.cell(), 1);
   ASSERT_EQ(cmds.size(), 1u);
-  EXPECT_EQ(cmds[0].action, smc_data_OP_CHATTER_SIGNAL);
+  EXPECT_EQ(cmds[0].action, static_cast<int32_t>(smc_data_OP_CHATTER_SIGNAL));
   EXPECT_EQ(smc::wire::get_string(cmds[0].operator_name), "alice");
   EXPECT_EQ(parse_json(http(f.port(), "GET", "/api/commands").body).list_value().values_size(), 1);
 }

@@ -185,7 +185,7 @@ void fill(smc_data_OperatorCommand& s) {
   set_string(s.machine_id, "mill-7");
   s.command_id = 31;
   s.issued_unix_ns = 1700000000000000000ULL;
-  s.action = smc_data_OP_CHATTER_SIGNAL;
+  s.action = static_cast<int32_t>(smc_data_OP_CHATTER_SIGNAL);
   set_string(s.operator_name, "alice");
 }
 void expect_same(const smc_data_OperatorCommand& a, const smc_data_OperatorCommand& b) {
