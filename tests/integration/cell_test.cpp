@@ -234,12 +234,15 @@ TEST_F(Cell, InvalidConfigurationIsRejectedAndReported) {
   tr::Topic<smc_data_EdgeStatus> status_topic(p);
   tr::Reader<smc_data_EdgeStatus> status(status_topic);
   ASSERT_TRUE(writer.writer().wait_for_readers(1, 20s));
+  smc_data_EdgeStatus last_status{};
   auto wait_message = [&](const std::string& needle) -> std::string {
     const auto deadline = Clock::now() + 20s;
     std::string last;
     while (Clock::now() < deadline) {
       status.take([&](const smc_data_EdgeStatus& s, const tr::SampleInfo& i) {
-        if (i.valid_data) last = smc::wire::get_string(s.message);
+        if (!i.valid_data) return;
+        last = smc::wire::get_string(s.message);
+        last_status = s;
       });
       if (last.find(needle) != std::string::npos) return last;
       std::this_thread::sleep_for(20ms);
@@ -257,6 +260,14 @@ TEST_F(Cell, InvalidConfigurationIsRejectedAndReported) {
   const std::string msg = wait_message("rejected");
   EXPECT_NE(msg.find("too-fast"), std::string::npos) << msg;
   EXPECT_NE(msg.find("feedrate"), std::string::npos) << msg;
+  // The whole reason, on one line, beside the configuration still in force.
+  const smc_data_EdgeStatus last = last_status;
+  const std::string refusal = smc::wire::get_string(last.refusal);
+  EXPECT_EQ(smc::wire::get_string(last.refused_config_id), "too-fast");
+  EXPECT_NE(refusal.find("supervisor_config.program.passes[0].feedrate_mm_s: must be in (0, 36]"),
+            std::string::npos)
+      << refusal;
+  EXPECT_EQ(refusal.find('\n'), std::string::npos) << refusal;
   // A good one is then accepted: the edge stayed safe and keeps working.
   cfg::SupervisorConfig good = bad;
   good.set_config_id("good");

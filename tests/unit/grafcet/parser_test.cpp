@@ -323,4 +323,18 @@ TEST(GrafcetParserErrors, SyntaxErrorInAStepDoesNotCascade) {
 }
 
 }  // namespace
+// Issue: a 10 MB garbage Grafcet gave 40 MB of errors.
+TEST(GrafcetParserErrors, GarbageGivesABoundedReport) {
+  std::string garbage;
+  for (int i = 0; garbage.size() < 10'000'000; ++i)
+    garbage += "step ?? when !!! -> ((( " + std::to_string(i) + "\n";
+  const ParseResult r = parse(garbage, "garbage.grafcet");
+  ASSERT_FALSE(r.ok());
+  ASSERT_EQ(r.errors.size(), kMaxErrors + 1);
+  EXPECT_NE(r.errors.back().message.find(" more errors"), std::string::npos);
+  std::size_t printed = 0;
+  for (const auto& d : r.errors) printed += d.str().size();
+  EXPECT_LT(printed, 64u * 1024);
+}
+
 }  // namespace smc::grafcet
