@@ -38,7 +38,7 @@ EdgeService::Impl::Impl(ServiceOptions o)
   dispatcher.on(config_reader.reader(), [this] { take_configs(); });
   dispatcher.poll([this] { apply_checked_configs(); });
   dispatcher.on(job_reader.reader(), [this] { take_jobs(); });
-  // The loop's rings and the job's life, on every wake-up (at least every 5 ms).
+  // The loop's rings and the job's life, on every wake-up (at least every 2 ms).
   dispatcher.poll([this] { supervise_job(); }, P::kLast);
 }
 
@@ -56,9 +56,9 @@ void EdgeService::Impl::supervise_job() {
 
 int EdgeService::Impl::run(const std::atomic<bool>& stop) {
   publish_status();
-  // Every 5 ms at least: the loop's rings are drained and its situation
-  // published within 5 ms of the loop's change.
-  while (!stop.load()) dispatcher.run_once(5ms);
+  // Every 2 ms at least: the loop's rings are drained and its situation
+  // published within 2 ms of the loop's change (about 0.5 % of a core).
+  while (!stop.load()) dispatcher.run_once(2ms);
   if (job) {
     stop_loop();
     drain();
