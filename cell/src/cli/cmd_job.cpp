@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "registry.hpp"
@@ -77,6 +78,20 @@ void print_job(const store::Job& j, const std::vector<store::JobEvent>& events) 
                 store::format_time(e.time_ms).c_str(), from.c_str(),
                 std::string(store::state_name(e.to_state)).c_str(), e.reason.c_str(), on.c_str());
   }
+}
+
+}  // namespace
+
+namespace {
+
+// The job with this id, or exit 2 naming the database and how to list ids.
+store::Job known_job(store::Store& s, const std::string& id) {
+  auto j = s.job(id);
+  if (!j) {
+    throw Failure(2, "unknown job '" + id + "' in " + s.path() +
+                         "; fix: see the ids with 'smc-cell job list --db " + s.path() + "'");
+  }
+  return *j;
 }
 
 }  // namespace
@@ -155,12 +170,8 @@ SMC_CELL_COMMAND(job, 20) {
   add_db_option(show, show_args->db);
   show->callback([show_args] {
     store::Store s = store::Store::open(show_args->db, store::OpenMode::kExisting);
-    const auto j = s.job(show_args->id);
-    if (!j) {
-      throw Failure(2, "unknown job '" + show_args->id + "' in " + s.path() +
-                           "; fix: see the ids with 'smc-cell job list --db " + s.path() + "'");
-    }
-    print_job(*j, s.events(j->id));
+    const store::Job j = known_job(s, show_args->id);
+    print_job(j, s.events(j.id));
   });
 
   struct CancelArgs {
@@ -179,11 +190,7 @@ SMC_CELL_COMMAND(job, 20) {
   add_db_option(cancel, cancel_args->db);
   cancel->callback([cancel_args] {
     store::Store s = store::Store::open(cancel_args->db, store::OpenMode::kExisting);
-    auto j = s.job(cancel_args->id);
-    if (!j) {
-      throw Failure(2, "unknown job '" + cancel_args->id + "' in " + s.path() +
-                           "; fix: see the ids with 'smc-cell job list --db " + s.path() + "'");
-    }
+    std::optional<store::Job> j = known_job(s, cancel_args->id);
     const std::string why = "cancelled: " + cancel_args->reason;
     if (j->state == smc::config::JOB_ASSIGNED) {
       if (!s.transition(j->id, j->state, smc::config::JOB_INTERRUPTED, why)) {

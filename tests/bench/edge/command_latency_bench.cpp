@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "child_process.hpp"
+#include "hostile_grafcet.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/transport/participant.hpp"
 #include "smc/wire/documents.hpp"
@@ -40,26 +41,6 @@ namespace {
 std::string src(const std::string& rel) { return std::string(SMC_SOURCE_DIR) + "/" + rel; }
 
 constexpr uint32_t kModuleC = 1u << 2;  // feed hold
-
-// A Grafcet reading one input whose cycles of coprime lengths give a
-// million reachable situations, padded with comments to the 64 KiB limit.
-std::string huge_state_space() {
-  std::string g = "grafcet hostile \"coprime cycles\"\ninput a \"a\"\n";
-  int step = 1, transition = 1;
-  for (int len : {3, 4, 5, 7, 11, 13, 17}) {
-    const int first = step;
-    for (int k = 0; k < len; ++k, ++step) {
-      g += "step " + std::to_string(step) + (k == 0 ? " initial" : "") + " \"s\"\n";
-    }
-    for (int k = 0; k < len; ++k) {
-      g += "transition " + std::to_string(transition++) + ": " + std::to_string(first + k) +
-           " -> " + std::to_string(first + (k + 1) % len) + " when ↑a\n";
-    }
-  }
-  while (g.size() < 64 * 1024 - 80)
-    g += "# padding to the size limit of a configuration's Grafcet\n";
-  return g;
-}
 
 // The hostile configuration: 20 inputs, at the size limit.
 std::string twenty_inputs() {
@@ -158,7 +139,8 @@ Stats run(int commands, bool hostile) {
     attacker = std::thread([&] {
       tr::Participant q({.partition = partition});
       smc::wire::DocumentPublisher<cfg::SupervisorConfig> evil(q);
-      const std::string texts[2] = {huge_state_space(), twenty_inputs()};
+      const std::string texts[2] = {smc::test::huge_state_space_grafcet(64 * 1024),
+                                    twenty_inputs()};
       int k = 0;
       while (!stop.load()) {
         cfg::SupervisorConfig c = good;

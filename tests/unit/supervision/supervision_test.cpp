@@ -9,6 +9,7 @@
 #include <numbers>
 #include <string>
 
+#include "hostile_grafcet.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/supervision/config.hpp"
 #include "smc/supervision/grafcet_binding.hpp"
@@ -113,35 +114,12 @@ TEST(Validate, ADiagnosticIsAlwaysOneLine) {
   EXPECT_EQ(std::count(why.begin(), why.end(), '\n'), 1) << why;
 }
 
-namespace {
-
-// A Grafcet whose state space is huge although it reads one input: cycles of
-// coprime lengths (3, 4, 5, 7, 11, 13, 17: 60 steps) all advance on each rise
-// of a, so the reachable situations number their product, 1,021,020.
-std::string hostile_grafcet() {
-  std::string g = "grafcet hostile \"many coprime cycles\"\ninput a \"a\"\n";
-  int step = 1, transition = 1;
-  for (int len : {3, 4, 5, 7, 11, 13, 17}) {
-    const int first = step;
-    for (int k = 0; k < len; ++k, ++step) {
-      g += "step " + std::to_string(step) + (k == 0 ? " initial" : "") + " \"s\"\n";
-    }
-    for (int k = 0; k < len; ++k) {
-      const int from = first + k, to = first + (k + 1) % len;
-      g += "transition " + std::to_string(transition++) + ": " + std::to_string(from) + " -> " +
-           std::to_string(to) + " when ↑a\n";
-    }
-  }
-  return g;
-}
-
-}  // namespace
-
 TEST(GrafcetBudget, AHugeStateSpaceIsRefusedByTheWorkBudget) {
   sv::CheckBudget budget;
   budget.max_time = std::chrono::milliseconds{0};  // the deterministic budget alone
   try {
-    (void)sv::bind_grafcet(hostile_grafcet(), "hostile.grafcet", sv::kPaperModules, budget);
+    (void)sv::bind_grafcet(smc::test::huge_state_space_grafcet(), "hostile.grafcet",
+                           sv::kPaperModules, budget);
     FAIL() << "a Grafcet of ten million situations was accepted";
   } catch (const sv::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("verification budget of 500000 evolution rounds is spent"),
