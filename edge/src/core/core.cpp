@@ -64,6 +64,10 @@ EdgeCore::EdgeCore(EdgeConfig config, Drive& drive, const ModuleRegistry& regist
   auto add = [](auto& list, int& n, Module* m) { list[static_cast<size_t>(n++)] = m; };
   for (const ModuleEntry& e : registry) {
     auto& slot = modules_[static_cast<size_t>(e.id)];
+    if (slot) {
+      throw ConfigError(std::string("module registry: module ") + letter(e.id) +
+                        " is listed twice");
+    }
     slot = e.make();
     Module* m = slot.get();
     if (is_active(config_.modules, e.id)) m->configure(config_.params);
