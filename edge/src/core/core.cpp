@@ -73,6 +73,7 @@ EdgeCore::EdgeCore(EdgeConfig config, Drive& drive, const ModuleRegistry& regist
     if (is_active(config_.modules, e.id)) m->configure(config_.params);
     m->attach(running_);
     if (m->takes_samples()) add(schedule_.sample, schedule_.n_sample, m);
+    if (m->starts_on_activation()) add(schedule_.starting, schedule_.n_starting, m);
     if (m->after_supervisor()) {
       add(schedule_.after_supervisor, schedule_.n_after, m);
       continue;
@@ -171,7 +172,7 @@ void EdgeCore::run_module(Module& m, bool sample_hook) noexcept {
   if (st != Status::kOk || undeclared != 0) raise_fault(Fault::kModuleError, id, undeclared);
 }
 
-void EdgeCore::apply_situation() noexcept {
+ModuleMask EdgeCore::apply_situation() noexcept {
   const ModuleMask before = s_.active;
   const ModuleMask after = static_cast<ModuleMask>(situation_.active & config_.modules);
   // Impulse actions reset modules; a routine that becomes active starts afresh.
@@ -184,6 +185,8 @@ void EdgeCore::apply_situation() noexcept {
     m->clear_outputs(s_);
   }
   s_.active = after;
+  // Active now, and either not active before or reset this tick.
+  return static_cast<ModuleMask>(after & (~before | resets));
 }
 
 void EdgeCore::tick(bool overrun) noexcept {
@@ -273,7 +276,12 @@ void EdgeCore::tick(bool overrun) noexcept {
   const uint64_t steps_before = situation_.active_steps;
   situation_ = supervisor_->evaluate(receptivities(s_, fault_hold_));
   if (situation_.error) raise_fault(Fault::kSupervisorError, -1, 0);
-  apply_situation();
+  const ModuleMask started = apply_situation();
+  // Modules whose first output is due at once (K, L) give it now, before A.
+  for (int i = 0; i < schedule_.n_starting; ++i) {
+    Module& m = *schedule_.starting[static_cast<size_t>(i)];
+    if ((started & bit(m.id())) != 0) run_module(m, false);
+  }
 
   // 6. Modules that act on this tick's decision (A, so a hold acts at once).
   if (fast) {

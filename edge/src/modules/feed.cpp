@@ -12,7 +12,11 @@ namespace smc::edge {
 void FeedrateRoutine::configure(const EdgeParameters& p) { p_ = p; }
 
 Status FeedrateRoutine::update(Signals& s) noexcept {
-  const bool hold = (s.active & bit(ModuleId::C)) != 0 || s.suppression_hold || !s.in_pass;
+  // G holds the feed from the tick it becomes active (before its first
+  // fast period has set suppression_hold) until it reports completion.
+  const bool suppressing = (s.active & bit(ModuleId::G)) != 0 && !s.suppression_done;
+  const bool hold =
+      (s.active & bit(ModuleId::C)) != 0 || s.suppression_hold || suppressing || !s.in_pass;
   const bool control =
       (s.active & (bit(ModuleId::K) | bit(ModuleId::L))) != 0 && s.controller_valid;
   double feedrate = s.programmed_feedrate_mm_s;

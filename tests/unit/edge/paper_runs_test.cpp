@@ -134,6 +134,56 @@ TEST(PaperRuns, SmcTwoDetectsChatterAddsAPassAndFinishesStable) {
       << "SMC I should overshoot less than SMC II";
 }
 
+// Whenever a force controller is active, A commands the controller's feed
+// (from the tick the controller starts, not from its first revolution), and
+// from the tick chatter is detected until the suppression routine completes,
+// A commands no feed at all. Fails on the old order, where A ran with G
+// active but not yet run (programmed feed for one fast period) and with a
+// freshly reset K or L that had no output yet (programmed feed for up to a
+// revolution).
+void expect_no_programmed_feed_slip(const std::string& config) {
+  uint64_t checked = 0, slips = 0, suppressing = 0;
+  std::string first;
+  RunOptions opts;
+  opts.on_tick = [&](const EdgeCore& c) {
+    const Signals& s = c.signals();
+    const ModuleMask controllers = static_cast<ModuleMask>(bit(ModuleId::K) | bit(ModuleId::L));
+    const bool g = (s.active & bit(ModuleId::G)) != 0 && !s.suppression_done;
+    const bool control = (s.active & controllers) != 0 && (s.active & bit(ModuleId::C)) == 0;
+    if (!s.in_pass || c.fault_hold()) return;
+    bool ok = true;
+    if (g) {
+      ++suppressing;
+      ok = s.feedrate_cmd_mm_s == 0;
+    } else if (control) {
+      ++checked;
+      const double want =
+          c.config().params.feedrate_for(s.controller_feed_per_tooth_mm, s.spindle_rpm);
+      ok = s.controller_valid &&
+           std::fabs(s.feedrate_cmd_mm_s - std::min(want, c.config().params.max_feedrate_mm_s)) <
+               1e-9;
+    }
+    if (!ok && slips++ == 0) {
+      first = "t=" + std::to_string(c.drive_sample().force.t_s) + " feed " +
+              std::to_string(s.feedrate_cmd_mm_s) + " controller " +
+              std::to_string(s.controller_feed_per_tooth_mm) +
+              (s.controller_valid ? "" : " (none)");
+    }
+  };
+  auto r = run_paper(config, opts);
+  EXPECT_TRUE(r->summary.completed());
+  EXPECT_GT(checked, 1000u);
+  EXPECT_EQ(slips, 0u) << config << ": first at " << first;
+  if (config == "smc2.textproto") {
+    EXPECT_GT(suppressing, 10u);
+  }
+}
+
+TEST(PaperRuns, AControllerOrTheSuppressionRoutineOwnsTheFeedFromItsFirstTick) {
+  expect_no_programmed_feed_slip("smc1.textproto");
+  expect_no_programmed_feed_slip("smc2.textproto");
+}
+
 TEST(PaperRuns, OperatorFeedHoldInPassTwoHoldsTheFeedAndFreezesFY) {
   // Find pass 2's steady state first, then hold in the middle of it.
   auto plain = run_paper("smc1.textproto");

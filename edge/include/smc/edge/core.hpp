@@ -153,13 +153,15 @@ class EdgeCore {
   struct Schedule {
     template <class T>
     using List = std::array<T, kMaxModules>;
-    List<Module*> sample{}, revolution{}, fast{}, event{}, after_supervisor{};
-    int n_sample = 0, n_revolution = 0, n_fast = 0, n_event = 0, n_after = 0;
+    List<Module*> sample{}, revolution{}, fast{}, event{}, after_supervisor{}, starting{};
+    int n_sample = 0, n_revolution = 0, n_fast = 0, n_event = 0, n_after = 0, n_starting = 0;
   };
 
   void raise_fault(Fault f, int module, double value) noexcept;
   void run_module(Module& m, bool sample_hook) noexcept;
-  void apply_situation() noexcept;
+  // Applies the new situation; returns the modules that started (became
+  // active or were reset) in this tick.
+  ModuleMask apply_situation() noexcept;
   void emit(EventKind kind) noexcept;
   EdgeEvent make_event(EventKind kind) const noexcept;
 

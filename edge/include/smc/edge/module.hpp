@@ -46,6 +46,11 @@ class Module {
   // Runs after the operation supervisor in the same tick, because it acts on
   // this tick's module activity (A: a hold must act at once).
   virtual bool after_supervisor() const noexcept { return false; }
+  // Its output is due in the tick it becomes active or is reset, not only at
+  // its next period: the core runs update() once then, after the operation
+  // supervisor and before the after_supervisor() modules (K, L: the feed to
+  // start from, so that A never falls back to the programmed feed).
+  virtual bool starts_on_activation() const noexcept { return false; }
 
   // ---- set-up, not real-time
   // Read parameters, size buffers. Throws ConfigError.

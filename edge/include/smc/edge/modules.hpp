@@ -204,6 +204,7 @@ class AdaptiveForceController final : public Module {
  public:
   AdaptiveForceController() noexcept : Module(ModuleId::K) {}
   Period period() const noexcept override { return Period::kRevolution; }
+  bool starts_on_activation() const noexcept override { return true; }
   SignalMask writes() const noexcept override { return mask(Signal::kControllerFeed); }
   void configure(const EdgeParameters& p) override;
   void reset() noexcept override;
@@ -222,6 +223,7 @@ class ModelBasedForceController final : public Module {
  public:
   ModelBasedForceController() noexcept : Module(ModuleId::L) {}
   Period period() const noexcept override { return Period::kRevolution; }
+  bool starts_on_activation() const noexcept override { return true; }
   SignalMask writes() const noexcept override { return mask(Signal::kControllerFeed); }
   void configure(const EdgeParameters& p) override;
   void reset() noexcept override;
