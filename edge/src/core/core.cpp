@@ -74,6 +74,9 @@ EdgeCore::EdgeCore(EdgeConfig config, Drive& drive, const ModuleRegistry& regist
     m->attach(running_);
     if (m->takes_samples()) add(schedule_.sample, schedule_.n_sample, m);
     if (m->starts_on_activation()) add(schedule_.starting, schedule_.n_starting, m);
+    if (m->supervisory() && is_active(config_.modules, e.id)) {
+      supervisory_ = static_cast<ModuleMask>(supervisory_ | bit(e.id));
+    }
     if (m->after_supervisor()) {
       add(schedule_.after_supervisor, schedule_.n_after, m);
       continue;
@@ -205,10 +208,19 @@ void EdgeCore::tick(bool overrun) noexcept {
   s_.depth_mm = drive_sample_.depth_mm;
   s_.programmed_feedrate_mm_s = drive_sample_.programmed_feedrate_mm_s;
   s_.in_pass = drive_sample_.in_pass;
-  s_.force_reference_n = p.force_reference_at(s_.spindle_rpm);
-  power_peak_w_ = std::max(power_peak_w_, drive_sample_.spindle_power_w);
-  power_sum_w_ += drive_sample_.spindle_power_w;
-  ++power_samples_;
+  s_.spindle_power_w = drive_sample_.spindle_power_w;
+  const int pass = drive_sample_.pass_index;
+  const double planned = pass >= 0 && pass < running_.program.count
+                             ? running_.program.passes[static_cast<size_t>(pass)].force_reference_n
+                             : 0.0;
+  s_.force_reference_planned = planned > 0;
+  s_.force_reference_base_n = planned > 0 ? planned : p.force_reference_at(s_.spindle_rpm);
+  s_.force_reference_n = s_.force_reference_base_n * s_.force_reference_scale;
+  if (std::isfinite(drive_sample_.spindle_power_w)) {
+    power_peak_w_ = std::max(power_peak_w_, drive_sample_.spindle_power_w);
+    power_sum_w_ += drive_sample_.spindle_power_w;
+    ++power_samples_;
+  }
   engagement_min_ = std::isnan(drive_sample_.engagement)
                         ? drive_sample_.engagement
                         : std::min(engagement_min_, drive_sample_.engagement);
@@ -228,7 +240,7 @@ void EdgeCore::tick(bool overrun) noexcept {
     s_.sample = f;
     for (int i = 0; i < schedule_.n_sample; ++i) {
       Module& m = *schedule_.sample[static_cast<size_t>(i)];
-      if (is_active(s_.active, m.id())) run_module(m, true);
+      if (is_active(s_.active | supervisory_, m.id())) run_module(m, true);
     }
     if (ticks_ % static_cast<uint64_t>(decimation_) == 0 && batch_.count < ForceBatchRecord::kMax) {
       if (batch_.count == 0) {
@@ -249,7 +261,7 @@ void EdgeCore::tick(bool overrun) noexcept {
   if (revolution) {
     for (int i = 0; i < schedule_.n_revolution; ++i) {
       Module& m = *schedule_.revolution[static_cast<size_t>(i)];
-      if (is_active(s_.active, m.id())) run_module(m, false);
+      if (is_active(s_.active | supervisory_, m.id())) run_module(m, false);
     }
   }
   // 4. Fast modules (B, D, G), then the configured event modules another
@@ -257,7 +269,7 @@ void EdgeCore::tick(bool overrun) noexcept {
   if (fast) {
     for (int i = 0; i < schedule_.n_fast; ++i) {
       Module& m = *schedule_.fast[static_cast<size_t>(i)];
-      if (is_active(s_.active, m.id())) run_module(m, false);
+      if (is_active(s_.active | supervisory_, m.id())) run_module(m, false);
     }
     for (int i = 0; i < schedule_.n_event; ++i) {
       Module& m = *schedule_.event[static_cast<size_t>(i)];
@@ -287,7 +299,7 @@ void EdgeCore::tick(bool overrun) noexcept {
   if (fast) {
     for (int i = 0; i < schedule_.n_after; ++i) {
       Module& m = *schedule_.after_supervisor[static_cast<size_t>(i)];
-      if (is_active(s_.active, m.id())) run_module(m, false);
+      if (is_active(s_.active | supervisory_, m.id())) run_module(m, false);
     }
   }
   if (fault_hold_) {
@@ -337,7 +349,8 @@ void EdgeCore::tick(bool overrun) noexcept {
     r.depth_mm = s_.depth_mm;
     r.spindle_rpm = s_.spindle_rpm;
     r.power_peak_w = power_peak_w_;
-    r.power_mean_w = power_samples_ > 0 ? power_sum_w_ / power_samples_ : 0;
+    // The drive's spindle power; M's estimate from the forces when it has none.
+    r.power_mean_w = power_samples_ > 0 ? power_sum_w_ / power_samples_ : s_.power_mean_w;
     r.x_mm = drive_sample_.x_mm;
     r.chatter_ratio = s_.chatter_ratio;
     r.gain_estimate = s_.gain_estimate;

@@ -210,7 +210,16 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
   sum.set_chatter_events(chatter);
   sum.set_chatter_detected_s(detected_t);
 
-  const double ref = run.revolutions.empty() ? 0 : run.revolutions.front().f_ref_n;
+  // F_ref may change during a run (module M lowers it to hold the spindle
+  // power): the summary's F_ref is the one at the first contact, and force
+  // violations are measured against the F_ref in force at each revolution.
+  double ref = run.revolutions.empty() ? 0 : run.revolutions.front().f_ref_n;
+  double worst_force_ratio = -1;  // max over contact revolutions of F_Y / F_ref
+  for (const auto& r : run.revolutions) {
+    if (!r.contact || !(r.f_ref_n > 0)) continue;
+    if (worst_force_ratio < 0) ref = r.f_ref_n;
+    worst_force_ratio = std::max(worst_force_ratio, r.f_y_peak_n / r.f_ref_n);
+  }
   sum.set_force_reference_n(ref);
   double peak_f = 0, peak_p = 0, peak_mean = 0;
   for (const auto& r : run.revolutions) {
@@ -222,7 +231,7 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
   sum.set_peak_mean_power_violation_pct(100.0 * (peak_mean - p.max_spindle_power_w) /
                                         p.max_spindle_power_w);
   sum.set_peak_force_n(peak_f);
-  sum.set_peak_force_violation_pct(ref > 0 ? 100.0 * (peak_f - ref) / ref : 0);
+  sum.set_peak_force_violation_pct(worst_force_ratio > 0 ? 100.0 * (worst_force_ratio - 1) : 0);
   sum.set_peak_power_w(peak_p);
   sum.set_peak_power_violation_pct(100.0 * (peak_p - p.max_spindle_power_w) /
                                    p.max_spindle_power_w);
@@ -235,12 +244,17 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
   const int settle = static_cast<int>(std::ceil(5 * tau / p.slow_period_s));
   const ModuleMask hold_mask = static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G));
   double worst_overshoot = -1e9, worst_sse = 0, depth_removed = 0;
+  // Steady mean spindle power: from kPowerSettleRevolutions after a pass's
+  // first contact to its end, revolutions in a hold left out.
+  constexpr int kPowerSettleRevolutions = 10;
+  double steady_power = 0;
+  uint32_t steady_power_revs = 0;
   uint32_t completed = 0;
   for (PassRun& pr : runs) {
     const double t0 = pr.s.start_s();
     const double t1 = pr.s.end_s() < 0 ? run.end_time_s + 1 : pr.s.end_s();
-    double max_f = 0, err_sum = 0;
-    int err_n = 0, settled = 0;
+    double max_ratio = 0, err_sum = 0;
+    int err_n = 0, settled = 0, since_contact = 0;
     bool any_contact = false;
     for (const auto& r : run.revolutions) {
       if (r.t_s <= t0 || r.t_s > t1) continue;
@@ -252,7 +266,11 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
       }
       if (!any_contact) pr.s.set_contact_s(r.t_s);
       any_contact = true;
-      max_f = std::max(max_f, r.f_y_peak_n);
+      if (++since_contact > kPowerSettleRevolutions) {
+        steady_power = std::max(steady_power, r.power_mean_w);
+        ++steady_power_revs;
+      }
+      if (r.f_ref_n > 0) max_ratio = std::max(max_ratio, r.f_y_peak_n / r.f_ref_n);
       const bool engaged = !std::isnan(r.engagement_min) && r.engagement_min >= 0.99;
       settled = engaged ? settled + 1 : 0;
       if (settled > settle && r.f_ref_n > 0) {
@@ -260,8 +278,8 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
         ++err_n;
       }
     }
-    if (any_contact && ref > 0) {
-      pr.s.set_overshoot_pct(100.0 * (max_f - ref) / ref);
+    if (any_contact && max_ratio > 0) {
+      pr.s.set_overshoot_pct(100.0 * (max_ratio - 1));
       worst_overshoot = std::max(worst_overshoot, pr.s.overshoot_pct());
     }
     if (err_n > 0) {
@@ -275,6 +293,8 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
     }
     *sum.add_passes() = pr.s;
   }
+  sum.set_steady_mean_power_w(steady_power);
+  sum.set_steady_power_revolutions(steady_power_revs);
   sum.set_passes_completed(completed);
   sum.set_depth_removed_mm(depth_removed);
   sum.set_overshoot_pct(worst_overshoot > -1e9 ? worst_overshoot : 0);

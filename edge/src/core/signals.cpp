@@ -26,6 +26,8 @@ const char* signal_name(Signal s) noexcept {
       return "controller_feed";
     case Signal::kFeedCommand:
       return "feed_command";
+    case Signal::kPowerLimit:
+      return "power_limit";
   }
   return "";
 }
@@ -70,6 +72,9 @@ SignalMask changed_signals(const Signals& x, const Signals& y) noexcept {
            differs(x.feed_per_tooth_cmd_mm, y.feed_per_tooth_cmd_mm) ||
            differs(x.feed_limited, y.feed_limited),
        Signal::kFeedCommand);
+  mark(differs(x.power_mean_w, y.power_mean_w) || differs(x.power_estimated, y.power_estimated) ||
+           differs(x.force_reference_scale, y.force_reference_scale),
+       Signal::kPowerLimit);
   return m;
 }
 

@@ -96,7 +96,7 @@ Status ReplayDrive::step(double /*feedrate_cmd_mm_s*/, DriveSample& out) noexcep
   out.programmed_feedrate_mm_s = spec.feedrate_mm_s;
   out.feedrate_mm_s = r.feedrate_mm_s >= 0 ? r.feedrate_mm_s : spec.feedrate_mm_s;
   out.x_mm = r.x_mm;
-  out.spindle_power_w = 0;
+  out.spindle_power_w = std::nan("");  // a force recording has no spindle power
   out.pass_index = pass;
   out.in_pass = r.in_pass;
   out.program_done = next_ >= rows_.size();

@@ -28,6 +28,86 @@ Status ContactMonitor::update(Signals& s) noexcept {
   return Status::kOk;
 }
 
+// ------------------------------------------------------------------- M --
+
+void SpindlePowerMonitor::configure(const EdgeParameters& p) {
+  p_ = p;
+  reset();
+}
+
+void SpindlePowerMonitor::reset() noexcept {
+  rho_ = 0;
+  slope_ = 0;
+  sum_w_ = 0;
+  samples_ = 0;
+  estimated_ = false;
+}
+
+Status SpindlePowerMonitor::on_sample(Signals& s) noexcept {
+  double w = s.spindle_power_w;
+  if (std::isnan(w)) {
+    const double v = supervision::cutting_speed_m_s(p_.cutter_radius_mm, s.spindle_rpm);
+    w = v * std::hypot(s.sample.f_x_n, s.sample.f_y_n);
+    estimated_ = true;
+  }
+  if (std::isfinite(w)) {
+    sum_w_ += w;
+    ++samples_;
+  }
+  return Status::kOk;
+}
+
+Status SpindlePowerMonitor::update(Signals& s) noexcept {
+  if (samples_ == 0) {
+    s.force_reference_scale = s.force_reference_planned ? 1.0 : p_.power_target_fraction;
+    return Status::kOk;
+  }
+  const double mean = sum_w_ / samples_;
+  s.power_mean_w = mean;
+  s.power_estimated = estimated_;
+  sum_w_ = 0;
+  samples_ = 0;
+  estimated_ = false;
+  const ModuleMask held = static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G));
+  const double limit = p_.power_target_fraction * p_.max_spindle_power_w / p_.force_safety_factor;
+  const double v = supervision::cutting_speed_m_s(p_.cutter_radius_mm, s.spindle_rpm);
+  // Learn the ratio only from a revolution cut under normal conditions: in
+  // contact, feeding, no hold, with a real power and force to compare.
+  if (s.contact && s.in_pass && (s.active & held) == 0 && mean > 0.05 * limit && v > 0 &&
+      s.f_y_peak_n > p_.contact_threshold_n) {
+    const double rho = mean / (v * s.f_y_peak_n);
+    const double revolution_s = 60.0 / s.spindle_rpm;
+    const double g = 1.0 - std::exp(-revolution_s / p_.power_time_constant_s);
+    if (rho_ > 0) {
+      // The ratio only rises within a job: the cutter leaving the part
+      // lowers it, and the next entry should start from what the full cut
+      // showed rather than from P_max / V.
+      const double before = rho_;
+      if (rho > rho_) rho_ += g * (rho - rho_);
+      slope_ += g * ((rho_ - before) - slope_);
+    } else {
+      rho_ = rho;
+      slope_ = 0;
+    }
+  }
+  // While the ratio rises (the cutter entering the part), lead it by the
+  // revolutions the force takes to follow a new F_ref: measured on one
+  // revolution, applied from the next, reached by the end of that one.
+  const double rho_ahead = rho_ + kLeadRevolutions * std::max(0.0, slope_);
+  // F_ref never exceeds the base; P_max / V (not a planned F_ref) takes the
+  // same share of the limit as the power, so the first revolutions of a cut,
+  // before the ratio is known, keep the margin too.
+  const double cap = s.force_reference_planned ? 1.0 : p_.power_target_fraction;
+  s.force_reference_scale = cap;
+  if (rho_ahead > 0 && v > 0 && s.force_reference_base_n > 0) {
+    // Above the target the revolution's own excess is taken off as well
+    // (the force controller lagging a rising engagement).
+    const double f_ref = limit / (v * rho_ahead) * std::min(1.0, limit / mean);
+    s.force_reference_scale = std::clamp(f_ref / s.force_reference_base_n, kMinScale, cap);
+  }
+  return std::isfinite(s.force_reference_scale) ? Status::kOk : Status::kError;
+}
+
 // ------------------------------------------------------------------- H --
 
 void ParameterEstimator::configure(const EdgeParameters& p) {
@@ -84,12 +164,18 @@ void ForceLaw::configure(double alpha, double min_fpt, double max_fpt, double ti
 
 void ForceLaw::start(double feed_per_tooth_mm) noexcept {
   u_ = std::clamp(std::pow(std::max(feed_per_tooth_mm, 0.0), alpha_), u_min_, u_max_);
+  last_reference_n_ = 0;
 }
 
 double ForceLaw::step(double force_n, double reference_n, double gain,
                       double max_fpt_now) noexcept {
   const double u_max = std::min(u_max_, std::pow(max_fpt_now, alpha_));
-  u_ += (1.0 - pole_) * (reference_n - force_n) / gain;
+  // Feedback with the pole p, and the reference's own change fed forward:
+  // a constant F_ref gives the law above; a step of F_ref (M lowering it)
+  // moves the force in one period instead of over tau.
+  const double change = last_reference_n_ > 0 ? reference_n - last_reference_n_ : 0.0;
+  last_reference_n_ = reference_n;
+  u_ += ((1.0 - pole_) * (reference_n - force_n) + change) / gain;
   u_ = std::clamp(u_, u_min_, std::max(u_min_, u_max));
   return feed_per_tooth();
 }

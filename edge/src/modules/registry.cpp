@@ -14,7 +14,8 @@ std::unique_ptr<Module> make() {
 }  // namespace
 
 const ModuleRegistry& paper_modules() {
-  // Data-flow order. Revolution modules: I measures F_Y, J thresholds it, E
+  // Data-flow order. Revolution modules: I measures F_Y, J thresholds it, M
+  // scales F_ref from the revolution's power (while in contact), E
   // and H read the revolution's samples and F_Y, K and L read F_Y and H's
   // estimate. Fast modules: B reads the operator, D reads B, G reads E/D's
   // decision (through the supervisor). F serves G's request. A reads the
@@ -22,6 +23,7 @@ const ModuleRegistry& paper_modules() {
   static const ModuleRegistry kModules = {
       {ModuleId::I, &make<ForceSignalProcessor>},
       {ModuleId::J, &make<ContactMonitor>},
+      {ModuleId::M, &make<SpindlePowerMonitor>},
       {ModuleId::E, &make<AutomaticChatterDetector>},
       {ModuleId::H, &make<ParameterEstimator>},
       {ModuleId::K, &make<AdaptiveForceController>},

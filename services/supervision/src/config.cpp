@@ -38,7 +38,8 @@ ValidatedConfig validate(const smc::config::SupervisorConfig& cfg, ModuleMask kn
     if (!id || !has(known, *id)) {
       problems.add(root + "modules[" + std::to_string(i) + "]",
                    common::quote(m, 16) + " is not a module",
-                   "use the module letters " + letters(known) + " (A to L: the paper's Table 1)");
+                   "use the module letters " + letters(known) +
+                       " (A to L: the paper's Table 1; M: spindle power monitor)");
       continue;
     }
     c.modules = static_cast<ModuleMask>(c.modules | bit(*id));
@@ -90,6 +91,11 @@ ValidatedConfig validate(const smc::config::SupervisorConfig& cfg, ModuleMask kn
                          number(p.max_feed_per_tooth_mm),
                      "lower the feedrate");
       }
+      if (!(ps.force_reference_n() >= 0 && std::isfinite(ps.force_reference_n()))) {
+        problems.add(at + "force_reference_n",
+                     "must be >= 0 N (got " + number(ps.force_reference_n()) + ")",
+                     "use 0 to derive it from the power limit");
+      }
       if (ps.spindle_rpm() > 0) {
         const double rev_s = 60.0 / ps.spindle_rpm();
         if (std::fabs(rev_s - p.slow_period_s) > p.sample_period_s) {
@@ -105,6 +111,7 @@ ValidatedConfig validate(const smc::config::SupervisorConfig& cfg, ModuleMask kn
     spec.depth_mm = ps.depth_mm();
     spec.feedrate_mm_s = ps.feedrate_mm_s();
     spec.spindle_rpm = ps.spindle_rpm();
+    spec.force_reference_n = ps.force_reference_n();
   }
   c.program.count = static_cast<uint16_t>(std::min(prog.passes_size(), kMaxPasses));
   c.program.revision = prog.revision();

@@ -27,7 +27,8 @@ const char* module_name(ModuleId m) noexcept {
                                                        "force signal processor",
                                                        "contact monitor",
                                                        "adaptive force controller",
-                                                       "model-based force controller"};
+                                                       "model-based force controller",
+                                                       "spindle power monitor"};
   const auto i = static_cast<int>(m);
   return i < kModuleCount ? kNames[i] : "";
 }

@@ -142,6 +142,16 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
                                        "set the F_z RMS below which E decides nothing, e.g. 5");
   p.suppression_hold_s = o.in_range("suppression_hold_s", op.suppression_hold_s(), 0, 60,
                                     "set module G's feed hold, e.g. 0.2");
+  p.power_time_constant_s =
+      op.power_time_constant_s() == 0
+          ? 0.1
+          : o.in_range("power_time_constant_s", op.power_time_constant_s(), 0.001, 10.0,
+                       "set module M's ratio filter time constant, e.g. 0.1 (0: the default)");
+  p.power_target_fraction =
+      op.power_target_fraction() == 0
+          ? 0.95
+          : o.in_range("power_target_fraction", op.power_target_fraction(), 0.5, 1.0,
+                       "set the share of P_max module M holds, e.g. 0.95 (0: the default)");
   p.force_sensor_range_n = o.positive("force_sensor_range_n", op.force_sensor_range_n(),
                                       "set the dynamometer's range, e.g. 5000");
 

@@ -20,9 +20,9 @@ using namespace smc::edge;
 
 namespace {
 
-constexpr auto kM = static_cast<ModuleId>(12);  // the first letter after the paper's
+constexpr auto kM = static_cast<ModuleId>(13);  // N: the first letter the project does not use
 
-// Test-only module M: runs once per revolution after I and J, writes nothing.
+// Test-only module N: runs once per revolution after I and J, writes nothing.
 // Records what it saw, so the test can check when it ran.
 struct Seen {
   int updates = 0;
@@ -44,7 +44,7 @@ class RevolutionWitness final : public Module {
   }
 };
 
-// Test-only module M that writes a signal it does not declare.
+// Test-only module N that writes a signal it does not declare.
 class Trespasser final : public Module {
  public:
   Trespasser() noexcept : Module(kM) {}
@@ -72,15 +72,15 @@ ModuleRegistry with_module_m() {
   return r;
 }
 
-// SMC I with module M active while in contact (step 4).
+// SMC I with module N active while in contact (step 4).
 smc::config::SupervisorConfig smc1_with_m() {
   auto cfg = test::shipped_config("smc1.textproto");
-  cfg.add_modules("M");
+  cfg.add_modules("N");
   std::string g = cfg.grafcet_text();
   const std::string action_l = "action L \"model-based force controller\"\n";
   const std::string step4 = "A, B, I, J, L\n";
-  g.replace(g.find(action_l), action_l.size(), action_l + "action M \"test-only witness\"\n");
-  g.replace(g.find(step4), step4.size(), "A, B, I, J, L, M\n");
+  g.replace(g.find(action_l), action_l.size(), action_l + "action N \"test-only witness\"\n");
+  g.replace(g.find(step4), step4.size(), "A, B, I, J, L, N\n");
   cfg.set_grafcet_text(g);
   return cfg;
 }
@@ -123,7 +123,7 @@ TEST(ModuleDeclarations, AnUndeclaredWriteFaultsTheModule) {
     if (e.kind != EventKind::kFault) continue;
     faulted = true;
     EXPECT_EQ(e.fault, Fault::kModuleError);
-    EXPECT_EQ(e.module, 12);
+    EXPECT_EQ(e.module, static_cast<int>(kM));
     EXPECT_EQ(static_cast<SignalMask>(e.value), mask(Signal::kContact));
     break;
   }
@@ -160,7 +160,7 @@ TEST(ModuleDeclarations, ATestOnlyModuleRunsAtItsDeclaredPeriodInDataFlowOrder) 
   EdgeCore core(cfg, mill, reg);
   core.set_check_declarations(true);
   core.start();
-  // M runs in a revolution tick when the previous tick's situation enabled it.
+  // N runs in a revolution tick when the previous tick's situation enabled it.
   int expected = 0;
   ModuleMask active_before = 0;
   RunOptions opts;

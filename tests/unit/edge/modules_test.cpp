@@ -189,6 +189,72 @@ TEST(ForceSignalProcessorAndContact, PeakOverOneRevolution) {
   EXPECT_FALSE(s.contact);  // 20 N is below the 50 N threshold
 }
 
+// M on a process whose mean power is rho V F_Y, with an ideal force loop
+// (F_Y = the F_ref of the revolution before): the mean power settles at the
+// target share of P_max, and F_ref never exceeds its base.
+TEST(SpindlePowerMonitor, HoldsTheMeanPowerAtTheTargetForTheCutsRatio) {
+  SpindlePowerMonitor m;
+  const EdgeParameters p = params();
+  m.configure(p);
+  Signals s;
+  s.spindle_rpm = 1500;
+  s.contact = true;
+  s.in_pass = true;
+  s.force_reference_base_n = p.force_reference_at(1500);
+  const double v = smc::supervision::cutting_speed_m_s(p.cutter_radius_mm, 1500);
+  const double target = p.power_target_fraction * p.max_spindle_power_w;
+  double f_ref = s.force_reference_base_n;
+  double power = 0;
+  for (int rev = 0; rev < 40; ++rev) {
+    const double rho = rev < 10 ? 0.5 + 0.06 * rev : 1.14;  // the cutter entering, then full
+    s.f_y_peak_n = f_ref;
+    power = rho * v * s.f_y_peak_n;
+    for (int k = 0; k < p.samples_per_revolution; ++k) {
+      s.spindle_power_w = power;
+      ASSERT_EQ(m.on_sample(s), Status::kOk);
+    }
+    ASSERT_EQ(m.update(s), Status::kOk);
+    EXPECT_NEAR(s.power_mean_w, power, 1e-9 * power);
+    EXPECT_FALSE(s.power_estimated);
+    EXPECT_LE(s.force_reference_scale, p.power_target_fraction);
+    f_ref = s.force_reference_base_n * s.force_reference_scale;
+  }
+  EXPECT_NEAR(power, target, 0.01 * target);
+  // Leaving the part (a falling ratio) does not raise F_ref again (beyond
+  // dropping the correction for the last revolution's own excess).
+  const double settled = s.force_reference_scale;
+  s.f_y_peak_n = f_ref;
+  for (int k = 0; k < p.samples_per_revolution; ++k) {
+    s.spindle_power_w = 0.3 * v * f_ref;
+    m.on_sample(s);
+  }
+  m.update(s);
+  EXPECT_LE(s.force_reference_scale, settled * 1.001);
+}
+
+TEST(SpindlePowerMonitor, EstimatesThePowerFromTheForcesWhenTheDriveHasNone) {
+  SpindlePowerMonitor m;
+  const EdgeParameters p = params();
+  m.configure(p);
+  Signals s;
+  s.spindle_rpm = 1500;
+  s.spindle_power_w = std::nan("");
+  s.sample.f_x_n = 30;
+  s.sample.f_y_n = 40;
+  for (int k = 0; k < p.samples_per_revolution; ++k) m.on_sample(s);
+  ASSERT_EQ(m.update(s), Status::kOk);
+  EXPECT_TRUE(s.power_estimated);
+  EXPECT_NEAR(s.power_mean_w, 50 * smc::supervision::cutting_speed_m_s(p.cutter_radius_mm, 1500),
+              1e-9);
+  // Not in contact: nothing learnt, F_ref at its capped base.
+  EXPECT_DOUBLE_EQ(s.force_reference_scale, p.power_target_fraction);
+  // A planned F_ref (SMC I) is not capped again.
+  s.force_reference_planned = true;
+  for (int k = 0; k < p.samples_per_revolution; ++k) m.on_sample(s);
+  m.update(s);
+  EXPECT_DOUBLE_EQ(s.force_reference_scale, 1.0);
+}
+
 TEST(AutomaticChatterDetector, SeparatesToothHarmonicsFromChatter) {
   AutomaticChatterDetector e;
   const EdgeParameters p = params();

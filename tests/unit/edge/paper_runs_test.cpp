@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <optional>
 
 #include "alloc_counter.hpp"
@@ -45,9 +47,12 @@ struct PaperRun {
   std::string first_mismatch;
 };
 
-std::unique_ptr<PaperRun> run_paper(const std::string& config, RunOptions opts = {}) {
+std::unique_ptr<PaperRun> run_paper(
+    const std::string& config, RunOptions opts = {},
+    const std::function<void(smc::config::SupervisorConfig&)>& change = {}) {
   auto r = std::make_unique<PaperRun>();
   r->raw = test::shipped_config(config);
+  if (change) change(r->raw);
   EdgeConfig cfg = edge_config_from_proto(r->raw);
   auto parsed = smc::grafcet::parse(cfg.grafcet_text, cfg.grafcet_name);
   EXPECT_TRUE(parsed.ok());
@@ -102,7 +107,26 @@ TEST(PaperRuns, SmcOnePlannedPassesTrackTheReferenceWithoutChatter) {
   }
   EXPECT_GT(s.overshoot_pct(), 0.0);  // reported
   EXPECT_NEAR(s.depth_removed_mm(), 2.0, 1e-9);
+  // The spindle power objective: held in the steady cut, and never more
+  // than 5 % over the limit on a revolution's mean.
+  EXPECT_GT(s.steady_power_revolutions(), 100u);
+  EXPECT_LE(s.steady_mean_power_w(), 745.7) << smc::documents::to_json(s);
+  EXPECT_LE(s.peak_mean_power_violation_pct(), 5.0) << smc::documents::to_json(s);
   EXPECT_EQ(r->activity_mismatches, 0u) << r->first_mismatch;
+}
+
+// The paper's F_ref = P_max / V alone (no module M): with two teeth often
+// in the cut, the mean spindle power per revolution sits well above P_max.
+TEST(PaperRuns, WithoutThePowerMonitorThePapersReferenceExceedsThePowerLimit) {
+  for (const char* config : {"smc1.textproto", "smc2.textproto"}) {
+    auto r = run_paper(config, {}, [](smc::config::SupervisorConfig& c) {
+      auto* modules = c.mutable_modules();
+      modules->erase(std::remove(modules->begin(), modules->end(), "M"), modules->end());
+      for (auto& pass : *c.mutable_program()->mutable_passes()) pass.set_force_reference_n(0);
+    });
+    EXPECT_TRUE(r->summary.completed()) << config;
+    EXPECT_GT(r->summary.steady_mean_power_w(), 1.08 * 745.7) << config;
+  }
 }
 
 TEST(PaperRuns, SmcTwoDetectsChatterAddsAPassAndFinishesStable) {
@@ -127,6 +151,8 @@ TEST(PaperRuns, SmcTwoDetectsChatterAddsAPassAndFinishesStable) {
   }
   EXPECT_EQ(completed_after_rewrite, 2);
   EXPECT_NEAR(s.depth_removed_mm(), 2.0, 1e-9);
+  EXPECT_GT(s.steady_power_revolutions(), 100u);
+  EXPECT_LE(s.steady_mean_power_w(), 745.7) << smc::documents::to_json(s);
   EXPECT_EQ(r->activity_mismatches, 0u) << r->first_mismatch;
 
   auto one = run_paper("smc1.textproto");

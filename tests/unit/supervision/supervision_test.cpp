@@ -71,6 +71,7 @@ TEST(Validate, EveryProblemIsListedWithItsFieldAndFix) {
   auto cfg = shipped("smc2.textproto");
   cfg.mutable_operation()->set_teeth(0);
   cfg.mutable_machine()->set_max_spindle_power_w(-1);
+  const int q_index = cfg.modules_size();
   cfg.add_modules("Q");
   cfg.mutable_program()->mutable_passes(0)->set_depth_mm(-2);
   const std::string why = refusal(cfg);
@@ -80,7 +81,9 @@ TEST(Validate, EveryProblemIsListedWithItsFieldAndFix) {
   EXPECT_NE(why.find("supervisor_config.machine.max_spindle_power_w: must be > 0 (got -1)"),
             std::string::npos)
       << why;
-  EXPECT_NE(why.find("supervisor_config.modules[11]: 'Q' is not a module"), std::string::npos)
+  EXPECT_NE(
+      why.find("supervisor_config.modules[" + std::to_string(q_index) + "]: 'Q' is not a module"),
+      std::string::npos)
       << why;
   EXPECT_NE(why.find("supervisor_config.program.passes[0].depth_mm"), std::string::npos) << why;
 }

@@ -162,6 +162,9 @@ class EdgeCore {
   // Applies the new situation; returns the modules that started (became
   // active or were reset) in this tick.
   ModuleMask apply_situation() noexcept;
+  // Configured modules that run under the state supervisor (M), whatever
+  // the operation supervisor's situation.
+  ModuleMask supervisory_ = 0;
   void emit(EventKind kind) noexcept;
   EdgeEvent make_event(EventKind kind) const noexcept;
 

@@ -16,9 +16,9 @@ struct DriveSample {
   double spindle_rpm = 0;
   double depth_mm = 0;  // depth of the pass in progress
   double programmed_feedrate_mm_s = 0;
-  double feedrate_mm_s = 0;  // actually applied
-  double x_mm = 0;           // tool position along the feed
-  double spindle_power_w = 0;
+  double feedrate_mm_s = 0;                    // actually applied
+  double x_mm = 0;                             // tool position along the feed
+  double spindle_power_w = __builtin_nan("");  // NaN when the drive cannot tell
   // Relative tool-part vibration in y (mm), when the drive knows it (the
   // simulated mill does; a real machine would need an extra sensor): NaN
   // otherwise. Used only to find chatter onset as ground truth in studies.

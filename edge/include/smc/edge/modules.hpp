@@ -180,6 +180,49 @@ class ContactMonitor final : public Module {
   double threshold_ = 0;
 };
 
+// M: spindle power monitor (beyond Table 1). The paper's F_ref = P_max / V
+// assumes F_Y bounds the tangential force; with two teeth in the cut it
+// does not, and the mean spindle power per revolution exceeds P_max. M
+// measures, per revolution in contact, the mean spindle power P (the
+// drive's, or V x |F_xy| when the drive has none: an upper bound with one
+// tooth in the cut) and the ratio rho = P / (V F_Y) of the cut: a property
+// of the engagement, nearly independent of the feed. Filtered,
+//   rho(k+1) = rho(k) + g (P(k) / (V F_Y(k)) - rho(k)), g = 1 - exp(-T / tau_p),
+// it gives the F_ref that puts the mean power at the target,
+//   F_ref = min(base, target_fraction x P_max / safety / (V rho)),
+// base being the pass's planned F_ref (SMC I: from the models) or P_max / V.
+// The force controllers (K, L) read it from the next tick on. No integrator:
+// rho does not depend on F_ref, so the loop inside the force loop cannot
+// fight it. Runs under the state supervisor whenever configured.
+class SpindlePowerMonitor final : public Module {
+ public:
+  SpindlePowerMonitor() noexcept : Module(ModuleId::M) {}
+  Period period() const noexcept override { return Period::kRevolution; }
+  SignalMask writes() const noexcept override { return mask(Signal::kPowerLimit); }
+  bool takes_samples() const noexcept override { return true; }
+  bool supervisory() const noexcept override { return true; }
+  void configure(const EdgeParameters& p) override;
+  void reset() noexcept override;
+  void clear_outputs(Signals& s) noexcept override {
+    s.power_mean_w = 0;
+    s.power_estimated = false;
+    s.force_reference_scale = 1;
+  }
+  Status on_sample(Signals& s) noexcept override;
+  Status update(Signals& s) noexcept override;
+
+  static constexpr double kMinScale = 0.2;
+  static constexpr double kLeadRevolutions = 2;
+
+ private:
+  EdgeParameters p_;
+  double sum_w_ = 0;
+  int samples_ = 0;
+  bool estimated_ = false;
+  double rho_ = 0;    // filtered P / (V F_Y); 0: not measured yet
+  double slope_ = 0;  // its filtered change per revolution
+};
+
 // Shared by K and L: the integral law in u = f^alpha that gives
 // F(k+1) = p F(k) + (1 - p) F_ref for a process F = G u with p = exp(-T/tau):
 //   u(k) = u(k-1) + (1 - p) (F_ref - F(k)) / G,
@@ -197,6 +240,7 @@ class ForceLaw {
 
  private:
   double alpha_ = 1, u_ = 0, u_min_ = 0, u_max_ = 0, pole_ = 0;
+  double last_reference_n_ = 0;  // 0: none yet (no feedforward on the first step)
 };
 
 // K: adaptive force controller: the law above with H's gain estimate.

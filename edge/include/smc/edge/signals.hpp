@@ -27,6 +27,7 @@ enum class Signal : uint32_t {
   kGainEstimate = 1u << 7,      // H: gain_estimate, gain_valid
   kControllerFeed = 1u << 8,    // K or L: controller_feed_per_tooth_mm, controller_valid
   kFeedCommand = 1u << 9,       // A: feedrate_cmd_mm_s, feed_per_tooth_cmd_mm, feed_limited
+  kPowerLimit = 1u << 10,       // M: power_mean_w, power_estimated, force_reference_scale
 };
 using SignalMask = uint32_t;
 constexpr SignalMask operator|(Signal a, Signal b) noexcept {
@@ -47,8 +48,11 @@ struct Signals {
   double spindle_rpm = 0;          // current pass
   double depth_mm = 0;             // current pass depth
   double programmed_feedrate_mm_s = 0;
-  double force_reference_n = 0;  // F_ref for the current pass
-  bool in_pass = false;          // the drive is executing a pass (not repositioning)
+  double force_reference_n = 0;          // F_ref now: the pass's base x M's scale
+  double force_reference_base_n = 0;     // the pass's planned F_ref, else P_max / V
+  bool force_reference_planned = false;  // the base is the pass's planned F_ref
+  double spindle_power_w = 0;            // from the drive; NaN when it cannot tell
+  bool in_pass = false;                  // the drive is executing a pass (not repositioning)
 
   // --- B operator input monitor
   bool feed_hold_requested = false;     // receptivity a
@@ -76,6 +80,10 @@ struct Signals {
   // --- K / L force controllers
   double controller_feed_per_tooth_mm = 0;
   bool controller_valid = false;
+  // --- M spindle power monitor
+  double power_mean_w = 0;           // mean spindle power over the last revolution
+  bool power_estimated = false;      // from the forces (the drive gives no power)
+  double force_reference_scale = 1;  // F_ref = base x this, in (0, 1]
   // --- A feedrate routine
   double feedrate_cmd_mm_s = 0;  // what the drive is told
   double feed_per_tooth_cmd_mm = 0;

@@ -39,8 +39,9 @@ struct ValidatedConfig {
 // checks this against the IDL at compile time).
 inline constexpr std::size_t kMaxConfigIdLength = 63;
 
-// The paper's modules, A–L.
-inline constexpr ModuleMask kPaperModules = (1u << kModuleCount) - 1;
+// The paper's modules, A–L, and every module the project has, A–M.
+inline constexpr ModuleMask kPaperModules = (1u << kPaperModuleCount) - 1;
+inline constexpr ModuleMask kKnownModules = (1u << kModuleCount) - 1;
 
 // Reads and checks the whole configuration, collecting every problem.
 // Throws ConfigError listing them (field paths under "supervisor_config.",
@@ -48,6 +49,6 @@ inline constexpr ModuleMask kPaperModules = (1u << kModuleCount) - 1;
 // configuration may name (an edge passes the modules it has). The Grafcet
 // is verified only when everything else is right.
 ValidatedConfig validate(const smc::config::SupervisorConfig& cfg,
-                         ModuleMask known = kPaperModules);
+                         ModuleMask known = kKnownModules);
 
 }  // namespace smc::supervision

@@ -17,9 +17,13 @@
 
 namespace smc::supervision {
 
-enum class ModuleId : uint8_t { A, B, C, D, E, F, G, H, I, J, K, L };
-inline constexpr int kModuleCount = 12;  // the paper's modules, A–L
-inline constexpr int kMaxModules = 16;   // what a ModuleMask can hold, A–P
+// A–L: the paper's Table 1. M: spindle power monitor (holds the mean spindle
+// power per revolution at the limit by scaling F_ref; runs under the state
+// supervisor whenever configured, not as a Grafcet action).
+enum class ModuleId : uint8_t { A, B, C, D, E, F, G, H, I, J, K, L, M };
+inline constexpr int kModuleCount = 13;       // A–M
+inline constexpr int kPaperModuleCount = 12;  // the paper's modules, A–L
+inline constexpr int kMaxModules = 16;        // what a ModuleMask can hold, A–P
 using ModuleMask = uint16_t;
 
 constexpr ModuleMask bit(ModuleId m) noexcept {
@@ -32,7 +36,7 @@ constexpr bool has(ModuleMask mask, ModuleId m) noexcept { return (mask & bit(m)
 std::optional<ModuleId> module_from_letter(std::string_view name) noexcept;
 // "ABIJ" for a mask; "" for 0.
 std::string letters(ModuleMask mask);
-// The paper's name of a module (Table 1), e.g. "feedrate routine"; "" past L.
+// The name of a module (Table 1's for A–L), e.g. "feedrate routine"; "" past M.
 const char* module_name(ModuleId m) noexcept;
 
 }  // namespace smc::supervision

@@ -62,6 +62,8 @@ struct Parameters {
   double chatter_min_rms_n = 0;
   double suppression_hold_s = 0;
   double force_sensor_range_n = 0;
+  double power_time_constant_s = 0.1;   // module M's filter on the power/force ratio
+  double power_target_fraction = 0.95;  // module M holds the mean power at this x P_max
   // Force-process model (eq. 1) for module L: F_Y[kN] = K d^beta f^alpha.
   bool has_force_model = false;
   double model_k_kn = 0;

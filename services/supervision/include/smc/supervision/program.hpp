@@ -13,6 +13,7 @@ struct PassSpec {
   double depth_mm = 0;       // depth of this pass
   double feedrate_mm_s = 0;  // programmed feedrate
   double spindle_rpm = 0;
+  double force_reference_n = 0;  // planned F_ref (N); 0: from the power limit
 };
 
 struct FixedProgram {
