@@ -42,6 +42,7 @@ std::vector<Event> CellState::on_summary(const smc_data_ForceSummary& s, std::in
   p.f_y = s.f_y_peak_n;
   p.f_ref = s.f_ref_n;
   p.feed = s.feedrate_mm_s;
+  p.power = s.spindle_power_w;
   p.pass_index = s.pass_index;
   p.pass_count = s.pass_count;
   p.contact = s.in_contact;
@@ -198,6 +199,7 @@ std::vector<Event> CellState::on_config(const std::string& machine_id,
   w.end_array()
       .field("explanation", c.explanation())
       .field("force_reference_n", c.operation().force_reference_n())
+      .field("max_spindle_power_w", c.machine().max_spindle_power_w())
       .field("part_id", c.program().part_id())
       .field("passes", c.program().passes_size());
   w.key("grafcet").raw(view.json).end_object();

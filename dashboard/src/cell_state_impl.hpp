@@ -75,6 +75,7 @@ struct SummaryPoint {
   float f_y = 0;
   float f_ref = 0;
   float feed = 0;
+  float power = 0;  // mean spindle power over the revolution
   std::uint16_t pass_index = 0;
   std::uint16_t pass_count = 0;
   bool contact = false;

@@ -55,6 +55,7 @@ std::optional<std::string> CellState::history_json(const std::string& machine_id
   column("f_y_peak_n", [](const SummaryPoint& p) { return p.f_y; });
   column("f_ref_n", [](const SummaryPoint& p) { return p.f_ref; });
   column("feedrate_mm_s", [](const SummaryPoint& p) { return p.feed; });
+  column("spindle_power_w", [](const SummaryPoint& p) { return p.power; });
   column("pass_index", [](const SummaryPoint& p) { return p.pass_index; });
   column("pass_count", [](const SummaryPoint& p) { return p.pass_count; });
   column("in_contact", [](const SummaryPoint& p) { return p.contact; });

@@ -85,6 +85,9 @@ async function main() {
     await page.waitForFunction((b) => window.smcApp.points('mill-1') >= b.n + 10 && window.smcApp.lastTime('mill-1') > b.t + 0.3,
       before, { timeout: 10000 });
     assert.ok(await page.locator('#force-chart canvas').count() > 0, 'the F_Y chart is drawn');
+    assert.ok(await page.locator('#power-chart canvas').count() > 0, 'the spindle power chart is drawn');
+    await page.waitForFunction(() => /spindle power\s*\d+ W of \d+ W/.test(
+      document.querySelector('#mill-facts')?.textContent ?? ''), null, { timeout: 10000 });
 
     step('3. the Grafcet view follows the supervisor (page vs DDS)');
     const seen = new Set();

@@ -4,7 +4,7 @@
 // controls). Data: GET /api/... once, then the Server-Sent Events stream
 // /api/stream. See dashboard/README.md for both.
 
-import { ForceChart, RawChart, Sparkline, formatMachineTime } from './charts.js';
+import { ForceChart, PowerChart, RawChart, Sparkline, formatMachineTime } from './charts.js';
 import { GrafcetView } from './grafcet.js';
 
 const MODULES = {
@@ -41,7 +41,7 @@ function newMill(id) {
   return {
     id, online: false, status: null, summary: null, situation: null, config: null, program: null,
     jobId: null, chatterCount: 0,
-    hist: { t: [], fy: [], fref: [], feed: [], pass: [], count: [] },
+    hist: { t: [], fy: [], fref: [], feed: [], power: [], pass: [], count: [] },
     situations: [], chatter: [], batches: [],
   };
 }
@@ -79,7 +79,7 @@ function appendPoint(m, s) {
   if (n > 0 && s.t <= h.t[n - 1]) return;  // already have it (replayed by hello)
   if (n > 0 && s.t - h.t[n - 1] > 1.0) {  // a gap in the data: break the lines there
     h.t.push((s.t + h.t[n - 1]) / 2);
-    for (const k of ['fy', 'fref', 'feed']) h[k].push(null);
+    for (const k of ['fy', 'fref', 'feed', 'power']) h[k].push(null);
     h.pass.push(h.pass[n - 1]);
     h.count.push(h.count[n - 1]);
   }
@@ -87,6 +87,7 @@ function appendPoint(m, s) {
   h.fy.push(s.f_y_peak_n);
   h.fref.push(s.f_ref_n > 0 ? s.f_ref_n : null);
   h.feed.push(s.feedrate_mm_s);
+  h.power.push(s.spindle_power_w);
   h.pass.push(s.pass_index);
   h.count.push(s.pass_count);
   if (h.t.length > MAX_POINTS) {
@@ -186,11 +187,11 @@ function connect() {
 // A null between two points more than a second apart, so lines do not
 // bridge a time without data.
 function breakGaps(h) {
-  const out = { t: [], fy: [], fref: [], feed: [], pass: [], count: [] };
+  const out = { t: [], fy: [], fref: [], feed: [], power: [], pass: [], count: [] };
   for (let i = 0; i < h.t.length; i++) {
     if (i > 0 && h.t[i] - h.t[i - 1] > 1.0) {
       out.t.push((h.t[i] + h.t[i - 1]) / 2);
-      out.fy.push(null); out.fref.push(null); out.feed.push(null);
+      out.fy.push(null); out.fref.push(null); out.feed.push(null); out.power.push(null);
       out.pass.push(h.pass[i - 1]); out.count.push(h.count[i - 1]);
     }
     for (const k of Object.keys(out)) out[k].push(h[k][i]);
@@ -206,7 +207,7 @@ async function loadHistory(id, seconds) {
   const live = m.hist;
   const firstLive = h.t.length ? h.t[h.t.length - 1] : -Infinity;
   const hist = { t: h.t, fy: h.f_y_peak_n, fref: h.f_ref_n.map((v) => (v > 0 ? v : null)),
-    feed: h.feedrate_mm_s, pass: h.pass_index, count: h.pass_count };
+    feed: h.feedrate_mm_s, power: h.spindle_power_w, pass: h.pass_index, count: h.pass_count };
   for (let i = 0; i < live.t.length; i++) {
     if (live.t[i] <= firstLive) continue;
     for (const k of Object.keys(hist)) hist[k].push(live[k][i]);
@@ -477,6 +478,7 @@ function millView(id) {
     h('div', { class: 'title' }, h('h1', {}, id), h('span', { id: 'edge-badge' }), h('span', { id: 'variant-badge' })),
     h('div', { id: 'mill-facts', class: 'facts' }), controls);
   const force = h('section', { class: 'panel force' }, h('h2', {}, 'F_Y per revolution, reference, feed'), h('div', { id: 'force-chart' }));
+  const power = h('section', { class: 'panel power' }, h('h2', {}, 'Spindle power per revolution, against its limit'), h('div', { id: 'power-chart' }));
   const raw = h('section', { class: 'panel raw' }, h('h2', {}, 'Raw F_y and F_z, last revolutions'), h('div', { id: 'raw-chart' }));
   const grafcet = h('section', { class: 'panel grafcet-panel' },
     h('h2', {}, 'Operation supervisor ', h('span', { id: 'grafcet-name', class: 'muted' })),
@@ -486,18 +488,20 @@ function millView(id) {
   const chatter = h('section', { class: 'panel' }, h('h2', {}, 'Chatter events'), h('div', { id: 'chatter-list' }));
   const log = h('section', { class: 'panel' }, h('h2', {}, 'Operator commands'), h('div', { id: 'command-log' }));
   const root = h('main', { id: 'mill-view', dataset: { mill: id } },
-    head, h('div', { class: 'mill-grid' }, h('div', { class: 'left' }, force, raw, jobs,
+    head, h('div', { class: 'mill-grid' }, h('div', { class: 'left' }, force, power, raw, jobs,
       h('div', { class: 'two' }, chatter, log)), grafcet));
   let forceChart = null;
+  let powerChart = null;
   let rawChart = null;
   const gv = new GrafcetView(grafcet.querySelector('#grafcet'));
-  const onResize = () => { forceChart?.resize(); rawChart?.resize(); };
+  const onResize = () => { forceChart?.resize(); powerChart?.resize(); rawChart?.resize(); };
   let drawnTables = -1;
   window.addEventListener('resize', onResize);
   return {
     root,
     mounted() {
       forceChart = new ForceChart(force.querySelector('#force-chart'), () => marksFor(m));
+      powerChart = new PowerChart(power.querySelector('#power-chart'), () => marksFor(m));
       rawChart = new RawChart(raw.querySelector('#raw-chart'));
     },
     render() {
@@ -507,6 +511,7 @@ function millView(id) {
       const s = mm.summary;
       root.querySelector('#mill-facts').replaceChildren(
         fact('F_Y', fmt(s?.f_y_peak_n, 0, ' N')), fact('F_ref', fmt(s?.f_ref_n || null, 0, ' N')),
+        fact('spindle power', s ? `${fmt(s.spindle_power_w, 0, ' W')} of ${fmt(mm.config?.max_spindle_power_w || null, 0, ' W')}` : '-'),
         fact('feed', fmt(s?.feedrate_mm_s, 1, ' mm/s')), fact('depth', fmt(s?.depth_mm, 2, ' mm')),
         fact('pass', s ? `${Math.min(s.pass_index + 1, s.pass_count)} / ${s.pass_count}` : '-'),
         fact('contact', s ? (s.in_contact ? 'yes' : 'no') : '-'),
@@ -523,6 +528,8 @@ function millView(id) {
       }
       const hist = mm.hist;
       forceChart?.setData([hist.t, hist.fy, hist.fref, hist.feed]);
+      const limit = mm.config?.max_spindle_power_w || null;
+      powerChart?.setData([hist.t, hist.power, hist.t.map(() => limit)]);
       rawChart?.setBatches(mm.batches);
       gv.setModel(mm.config?.grafcet ?? null);
       gv.update(mm.situation?.active_steps ?? [], mm.situation?.modules ?? '');
@@ -554,6 +561,7 @@ function millView(id) {
     destroy() {
       window.removeEventListener('resize', onResize);
       forceChart?.destroy();
+      powerChart?.destroy();
       rawChart?.destroy();
     },
   };

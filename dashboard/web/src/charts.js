@@ -123,6 +123,46 @@ export class ForceChart {
   destroy() { this.u.destroy(); }
 }
 
+// Mean spindle power per revolution against the machine's limit (the
+// configuration in force), on the same time axis as the force chart.
+export class PowerChart {
+  constructor(el, getMarks, windowS = 30) {
+    this.el = el;
+    this.windowS = windowS;
+    const opts = {
+      ...size(el, 170),
+      class: 'power-chart',
+      legend: { live: true },
+      cursor: { drag: { x: false, y: false } },
+      scales: {
+        x: { time: false, range: (u, min, max) => [Math.max(min, max - this.windowS), max] },
+        y: { range: (u, min, max) => [0, Math.max(1000, max * 1.12)] },
+      },
+      axes: [
+        { label: 'machine time', values: (u, ticks) => ticks.map((t) => formatMachineTime(t)),
+          space: 70, stroke: css('--axis') },
+        { label: 'power (W)', stroke: css('--axis'), grid: { stroke: css('--grid') } },
+      ],
+      series: [
+        { label: 't (s)', value: (u, v) => formatMachineTime(v, 2) },
+        { label: 'spindle power', stroke: '#7048e8', width: 1.6,
+          value: (u, v) => (v == null ? '' : v.toFixed(0) + ' W') },
+        { label: 'limit', stroke: '#e03131', width: 1.2, dash: [7, 5],
+          value: (u, v) => (v == null ? '' : v.toFixed(0) + ' W') },
+      ],
+      plugins: [marksPlugin(getMarks)],
+    };
+    this.u = new uPlot(opts, [[], [], []], el);
+  }
+
+  setData(cols) {
+    this.u.setData(cols);
+    if (this.u.cursor.left == null || this.u.cursor.left < 0) this.u.setLegend({ idx: cols[0].length - 1 });
+  }
+  resize() { this.u.setSize(size(this.el, 170)); }
+  destroy() { this.u.destroy(); }
+}
+
 // Raw F_y and F_z of the last revolutions (ForceBatch).
 export class RawChart {
   constructor(el) {

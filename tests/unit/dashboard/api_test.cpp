@@ -98,6 +98,7 @@ TEST(DashboardApi, MillStateFollowsTheLiveTopicsAndDocuments) {
   cfg.set_grafcet_name("smc2");
   cfg.set_grafcet_text(read_text(std::string(SMC_SOURCE_DIR) + "/cell/grafcets/smc2.grafcet"));
   cfg.add_modules("A");
+  cfg.mutable_machine()->set_max_spindle_power_w(745.7);
   cfg.set_explanation("no models: SMC II");
   f.cell().configs.publish("mill-t", "cfg-1", cfg);
   // Step index 3 is step number 4 of smc2 ("contact, no chatter"); modules A B I J.
@@ -112,6 +113,8 @@ TEST(DashboardApi, MillStateFollowsTheLiveTopicsAndDocuments) {
   const auto mill = parse_json(http(f.port(), "GET", "/api/mills/mill-t").body);
   EXPECT_EQ(field(field(mill, "situation"), "modules").string_value(), "ABIJ");
   EXPECT_EQ(field(field(mill, "config"), "variant").string_value(), "SMC_II");
+  // The spindle power's limit, for the power chart.
+  EXPECT_DOUBLE_EQ(field(field(mill, "config"), "max_spindle_power_w").number_value(), 745.7);
   EXPECT_EQ(field(field(mill, "status"), "state").string_value(), "EDGE_RUNNING");
   EXPECT_TRUE(field(mill, "online").bool_value());
 
@@ -133,6 +136,7 @@ TEST(DashboardApi, MillStateFollowsTheLiveTopicsAndDocuments) {
   }));
   auto h = parse_json(http(f.port(), "GET", "/api/mills/mill-t/history").body);
   EXPECT_EQ(field(h, "f_y_peak_n").list_value().values(0).number_value(), 201.5);
+  EXPECT_EQ(field(h, "spindle_power_w").list_value().values(0).number_value(), 806.0);
   EXPECT_NEAR(field(h, "t").list_value().values(0).number_value(), 1.28, 1e-9);  // machine time
 
   smc::config::JobStatus job;

@@ -85,6 +85,7 @@ struct CellSide {
     s.revolution = revolution;
     s.f_y_peak_n = f_y;
     s.f_ref_n = 190.f;
+    s.spindle_power_w = 4.f * f_y;
     s.pass_count = 1;
     s.in_contact = true;
     summaries.write(s);
