@@ -46,9 +46,17 @@ echo "== cell database (seeded): $run/cell.db"
 echo "== starting the cell service and two simulated mills (DDS on loopback, partition $partition)"
 "$bin/smc-cell" serve --db "$run/cell.db" --partition "$partition" >"$run/cell.log" 2>&1 &
 pids+=($!)
+# Each simulated mill cuts with its own "true" model: mill-1 is the machine the
+# cell's database describes; mill-2 differs from it (tool 25 % softer, 30 %
+# less damped, material 20 % harder: cell/models/paper_face_mill_mismatched.textproto).
+declare -A true_model=(
+  [mill-1]="$root/cell/models/paper_face_mill.textproto"
+  [mill-2]="$root/cell/models/paper_face_mill_mismatched.textproto"
+)
 for m in mill-1 mill-2; do
+  echo "   $m cuts as $(basename "${true_model[$m]}")"
   "$bin/smc-edge" run --machine "$m" --partition "$partition" --paced --speedup "$speedup" \
-    --mill-model "$root/cell/models/paper_face_mill.textproto" >"$run/$m.log" 2>&1 &
+    --mill-model "${true_model[$m]}" >"$run/$m.log" 2>&1 &
   pids+=($!)
 done
 if [[ -x "$bin/smc-dashboard" ]]; then

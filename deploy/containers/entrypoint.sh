@@ -24,6 +24,9 @@
 #              CAP_SYS_NICE, CAP_IPC_LOCK and a memlock limit; without them the
 #              edge says so and runs without)
 #              SMC_MILL_MODEL [/usr/share/smc/cell/models/paper_face_mill.textproto]
+#                the simulated mill's own "true" model; e.g.
+#                .../paper_face_mill_mismatched.textproto for a mill that
+#                differs from the cell's database
 #   dashboard: SMC_HTTP [0.0.0.0:8080]  SMC_TOKEN_FILE (operator tokens; read-only without)
 set -euo pipefail
 

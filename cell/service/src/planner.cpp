@@ -95,7 +95,7 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
   if (sel.variant == smc::config::SMC_I) {
     c.set_grafcet_name("smc1.grafcet");
     c.set_grafcet_text(smc1_text_);
-    for (const char* m : {"A", "B", "C", "I", "J", "L"}) c.add_modules(m);
+    for (const char* m : {"A", "B", "C", "I", "J", "L", "M"}) c.add_modules(m);
     *c.mutable_force_model() = sel.force->force;
     smc::config::MillingModel model = sel.milling->milling;
     *model.mutable_cutter() = mm->cutter();
@@ -130,7 +130,9 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
   } else {
     c.set_grafcet_name("smc2.grafcet");
     c.set_grafcet_text(smc2_text_);
-    for (const char* m : {"A", "B", "C", "D", "E", "F", "G", "H", "I", "J", "K"}) c.add_modules(m);
+    for (const char* m : {"A", "B", "C", "D", "E", "F", "G", "H", "I", "J", "K", "M"}) {
+      c.add_modules(m);
+    }
   }
   for (int i = 0; i < passes; ++i) {
     auto* p = prog->add_passes();

@@ -133,7 +133,7 @@ TEST_F(CellChoices, TransferLinePartIsPlannedAsTwoEqualChatterFreePasses) {
     EXPECT_DOUBLE_EQ(p.spindle_rpm(), 1500);
     EXPECT_DOUBLE_EQ(p.feedrate_mm_s(), 10);
   }
-  EXPECT_EQ(modules_of(plan.config), "ABCIJL");
+  EXPECT_EQ(modules_of(plan.config), "ABCIJLM");
   EXPECT_EQ(plan.config.grafcet_name(), "smc1.grafcet");
   EXPECT_TRUE(plan.config.has_force_model());
   EXPECT_NEAR(plan.config.operation().slow_period_s(), 0.04, 1e-12);  // one revolution
@@ -148,7 +148,7 @@ TEST_F(CellChoices, JobShopPartRunsAsProgrammedUnderSmcII) {
   const auto plan = planner_->plan(in, sel);
   ASSERT_EQ(plan.config.program().passes_size(), 1);
   EXPECT_DOUBLE_EQ(plan.config.program().passes(0).depth_mm(), 2.0);
-  EXPECT_EQ(modules_of(plan.config), "ABCDEFGHIJK");
+  EXPECT_EQ(modules_of(plan.config), "ABCDEFGHIJKM");
   EXPECT_EQ(plan.config.grafcet_name(), "smc2.grafcet");
   EXPECT_FALSE(plan.config.has_force_model());
   EXPECT_LT(plan.critical_depth_mm, 0);  // no stability analysis without models
