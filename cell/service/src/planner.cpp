@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "smc/cell/power_plan.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/machining/model_proto.hpp"
 #include "smc/machining/tds.hpp"
@@ -154,6 +155,8 @@ smc::config::SupervisorConfig Planner::for_machine(const smc::config::Supervisor
   m->set_max_spindle_power_w(machine.max_spindle_power_w);
   m->set_max_feedrate_mm_s(machine.max_feedrate_mm_s);
   m->set_max_spindle_rpm(machine.max_spindle_rpm);
+  // SMC I: each pass's F_ref from the models, for this machine's power.
+  plan_force_references(c);
   return c;
 }
 

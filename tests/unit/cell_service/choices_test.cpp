@@ -11,9 +11,11 @@
 
 #include "smc/cell/dispatch.hpp"
 #include "smc/cell/planner.hpp"
+#include "smc/cell/power_plan.hpp"
 #include "smc/cell/store/seed.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/documents/load.hpp"
+#include "smc/supervision/parameters.hpp"
 
 namespace cell = smc::cell;
 namespace store = smc::cell::store;
@@ -118,6 +120,41 @@ TEST(Selection, AnUnvalidatedStructuralModelDoesNotMakeSmcI) {
 }
 
 // ---- planning
+
+// SMC I: each pass's F_ref is planned from the models so that the planned
+// cut's mean spindle power is the share of the machine's limit that module M
+// holds (not the paper's P_max / V, which puts it ~14 % above the limit).
+TEST_F(CellChoices, TheSmcIPlanSetsEachPassesForceReferenceForTheMachinesPower) {
+  const auto in = inputs("bracket-tl");
+  const auto sel = cell::select_variant(in);
+  ASSERT_EQ(sel.variant, cfg::SMC_I) << sel.explanation;
+  const auto plan = planner_->plan(in, sel);
+  store::Machine machine;
+  machine.id = "mill-x";
+  machine.max_spindle_power_w = 745.7;
+  machine.max_feedrate_mm_s = 36;
+  machine.max_spindle_rpm = 3000;
+  const auto c = cell::Planner::for_machine(plan.config, machine, "c-1");
+  const double v = smc::supervision::cutting_speed_m_s(in.tool.radius_mm, 1500);
+  const double papers = 745.7 / v;  // 190 N
+  for (const auto& p : c.program().passes()) {
+    const double rho = cell::power_force_ratio(c.milling_model(), p.depth_mm(), 1500,
+                                               smc::supervision::feed_per_tooth_mm(10, 4, 1500));
+    EXPECT_GT(rho, 1.05) << "two teeth in the cut: the mean power exceeds V F_Y";
+    EXPECT_NEAR(p.force_reference_n(), 0.95 * 745.7 / (v * rho), 1e-9);
+    EXPECT_LT(p.force_reference_n(), 0.9 * papers);
+  }
+  // Half the power, half the force.
+  machine.max_spindle_power_w = 745.7 / 2;
+  const auto half = cell::Planner::for_machine(plan.config, machine, "c-2");
+  EXPECT_NEAR(half.program().passes(0).force_reference_n(),
+              c.program().passes(0).force_reference_n() / 2, 1e-9);
+  // SMC II plans carry no planned F_ref (the edge learns the ratio).
+  const auto js = inputs("housing-js");
+  const auto js_plan = planner_->plan(js, cell::select_variant(js));
+  const auto js_c = cell::Planner::for_machine(js_plan.config, machine, "c-3");
+  EXPECT_EQ(js_c.program().passes(0).force_reference_n(), 0);
+}
 
 TEST_F(CellChoices, TransferLinePartIsPlannedAsTwoEqualChatterFreePasses) {
   const auto in = inputs("bracket-tl");
