@@ -35,7 +35,8 @@ void plan_force_references(smc::config::SupervisorConfig& c) {
   for (auto& pass : *c.mutable_program()->mutable_passes()) {
     const double fpt =
         smc::supervision::feed_per_tooth_mm(pass.feedrate_mm_s(), teeth, pass.spindle_rpm());
-    const double rho = power_force_ratio(c.milling_model(), pass.depth_mm(), pass.spindle_rpm(), fpt);
+    const double rho =
+        power_force_ratio(c.milling_model(), pass.depth_mm(), pass.spindle_rpm(), fpt);
     const double v = smc::supervision::cutting_speed_m_s(op.cutter_radius_mm(), pass.spindle_rpm());
     pass.set_force_reference_n(limit / (v * rho));
   }
