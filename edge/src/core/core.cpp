@@ -124,6 +124,8 @@ void EdgeCore::start() {
   fault_ = Fault::kNone;
   fault_hold_ = false;
   ticks_ = 0;
+  revolution_phase_ = 0;
+  revolution_samples_ = 0;
   chatter_events_ = 0;
   power_peak_w_ = 0;
   power_sum_w_ = 0;
@@ -192,6 +194,31 @@ ModuleMask EdgeCore::apply_situation() noexcept {
   return static_cast<ModuleMask>(after & (~before | resets));
 }
 
+bool EdgeCore::advance_revolution_clock() noexcept {
+  const EdgeParameters& p = config_.params;
+  // One revolution per 60 / rpm s of the measured speed; while the spindle is
+  // still (or slower than the supervised range) the slow period stands in,
+  // so that monitoring and telemetry go on.
+  const double rpm = s_.spindle_rpm;
+  const double step = std::isfinite(rpm) && rpm >= p.min_spindle_rpm
+                          ? rpm / 60.0 * p.sample_period_s
+                          : 1.0 / p.samples_per_revolution;
+  revolution_phase_ += step;
+  ++revolution_samples_;
+  // A revolution ends on the sample that completes it; a whole number of
+  // samples per revolution (80 at 1500 rpm and 0.5 ms) must not slip by one
+  // through rounding, and a revolution never outgrows the modules' buffers.
+  if (revolution_phase_ < 1.0 - 1e-9 && revolution_samples_ < p.max_samples_per_revolution) {
+    return false;
+  }
+  revolution_phase_ = std::max(0.0, revolution_phase_ - 1.0);
+  if (revolution_phase_ < 1e-9) revolution_phase_ = 0;
+  s_.revolution_samples = revolution_samples_;
+  s_.revolution_period_s = revolution_samples_ * p.sample_period_s;
+  revolution_samples_ = 0;
+  return true;
+}
+
 void EdgeCore::tick(bool overrun) noexcept {
   ++ticks_;
   const EdgeParameters& p = config_.params;
@@ -253,7 +280,7 @@ void EdgeCore::tick(bool overrun) noexcept {
     }
   }
 
-  const bool revolution = ticks_ % static_cast<uint64_t>(p.samples_per_revolution) == 0;
+  const bool revolution = advance_revolution_clock();
   const bool fast = ticks_ % static_cast<uint64_t>(p.samples_per_fast) == 0;
   const bool chatter_before = s_.chatter_detected;
 
@@ -341,6 +368,7 @@ void EdgeCore::tick(bool overrun) noexcept {
   if (revolution) {
     RevolutionRecord r;
     r.t_s = f.t_s;
+    r.period_s = s_.revolution_period_s;
     r.revolution = s_.revolutions;
     r.f_y_peak_n = s_.f_y_peak_n;
     r.f_ref_n = s_.force_reference_n;

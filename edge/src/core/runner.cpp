@@ -67,11 +67,11 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
     if (options.keep_samples && i % static_cast<uint64_t>(decimation) == 0) {
       const DriveSample& d = core.drive_sample();
       const Signals& s = core.signals();
-      run.samples.push_back(TraceSample{d.force.t_s, d.x_mm, d.force.f_y_n, d.force.f_z_n,
-                                        s.f_y_peak_n, s.force_reference_n, s.feedrate_cmd_mm_s,
-                                        d.depth_mm, d.spindle_power_w, d.vibration_y_mm,
-                                        d.engagement, static_cast<int16_t>(d.pass_index), d.in_pass,
-                                        s.contact, s.active, core.situation().active_steps});
+      run.samples.push_back(TraceSample{
+          d.force.t_s, d.x_mm, d.force.f_y_n, d.force.f_z_n, s.f_y_peak_n, s.force_reference_n,
+          s.feedrate_cmd_mm_s, d.depth_mm, d.spindle_rpm, d.spindle_power_w, d.vibration_y_mm,
+          d.engagement, static_cast<int16_t>(d.pass_index), d.in_pass, s.contact, s.active,
+          core.situation().active_steps});
     }
     while (core.events().try_pop(ev)) run.events.push_back(ev);
     while (core.revolutions().try_pop(rev)) run.revolutions.push_back(rev);
@@ -98,31 +98,59 @@ namespace {
 constexpr double kOnsetThreshold = 0.15;
 constexpr double kMinEngagement = 0.05;
 
-double chatter_onset(const RunResult& run, int samples_per_rev, int decimation) {
-  const size_t n = static_cast<size_t>(samples_per_rev / decimation);
-  if (n < 4 || run.samples.size() < 3 * n) return -1;
+double chatter_onset(const RunResult& run, double still_period_s) {
+  if (run.samples.size() < 16) return -1;
+  const double dt = run.samples[1].t_s - run.samples[0].t_s;
+  if (!(dt > 0)) return -1;
   const ModuleMask hold = static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G));
+  auto period_s = [&](const TraceSample& x) {
+    return x.spindle_rpm > 0 ? 60.0 / x.spindle_rpm : still_period_s;
+  };
+  // Revolutions of the trace, by the spindle speed it records (as the
+  // core's revolution clock counts them).
+  std::vector<size_t> starts{0};
+  double phase = 0;
+  for (size_t k = 0; k < run.samples.size(); ++k) {
+    phase += dt / period_s(run.samples[k]);
+    if (phase < 1.0 - 1e-9) continue;
+    phase = std::max(0.0, phase - 1.0);
+    if (phase < 1e-9) phase = 0;
+    starts.push_back(k + 1);
+  }
+  const size_t revs = starts.size() - 1;
+  if (revs < 4) return -1;
   // Per revolution: the statistic, and whether it is comparable with the
   // revolution before (both fully in the cut, no hold, not leaving the part).
-  const size_t revs = run.samples.size() / n;
+  // The vibration one revolution earlier is interpolated between samples
+  // when a revolution is not a whole number of them.
   std::vector<double> ratio(revs, 0.0);
   std::vector<bool> comparable(revs, false);
   for (size_t r = 1; r < revs; ++r) {
     double diff = 0, energy = 0;
     bool ok = true;
-    for (size_t k = r * n; k < (r + 1) * n; ++k) {
+    for (size_t k = starts[r]; k < starts[r + 1]; ++k) {
       const TraceSample& now = run.samples[k];
-      const TraceSample& before = run.samples[k - n];
-      if (std::isnan(now.vibration_y_mm) || std::isnan(before.vibration_y_mm)) return -1;
+      const double back = static_cast<double>(k) - period_s(now) / dt;
+      if (back < 0) {
+        ok = false;
+        continue;
+      }
+      const auto j = static_cast<size_t>(back);
+      const double w = back - static_cast<double>(j);
+      const TraceSample& before = run.samples[j];
+      const TraceSample& after = run.samples[std::min(j + 1, k)];
+      const double v_before = w > 0 ? (1 - w) * before.vibration_y_mm + w * after.vibration_y_mm
+                                    : before.vibration_y_mm;
+      if (std::isnan(now.vibration_y_mm) || std::isnan(v_before)) return -1;
       // A hold or the end of the pass that begins within this revolution
       // (a reaction to it) ends the comparison there; one in force at its
       // start, or in the revolution before, makes it not comparable.
       const bool stopped = !now.in_pass || (now.active & hold) != 0;
-      if (stopped && k > r * n) break;
+      if (stopped && k > starts[r]) break;
       ok = ok && !stopped && before.in_pass && now.engagement > kMinEngagement &&
            before.engagement > kMinEngagement && now.engagement >= before.engagement &&
            (before.active & hold) == 0;
-      const double d = now.vibration_y_mm - before.vibration_y_mm;
+      const double d = now.vibration_y_mm - v_before;
       diff += d * d;
       energy += now.vibration_y_mm * now.vibration_y_mm;
     }
@@ -137,7 +165,7 @@ double chatter_onset(const RunResult& run, int samples_per_rev, int decimation) 
   for (size_t r = 2; r + 1 < revs; ++r) {
     if (!comparable[r] || !comparable[r - 1]) continue;
     if (ratio[r] <= kOnsetThreshold || ratio[r] <= ratio[r - 1]) continue;
-    if (!comparable[r + 1] || ratio[r + 1] > ratio[r]) return run.samples[r * n].t_s;
+    if (!comparable[r + 1] || ratio[r + 1] > ratio[r]) return run.samples[starts[r]].t_s;
   }
   return -1;
 }
@@ -241,7 +269,6 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
   // constants after full engagement or after a hold).
   const bool model = (cfg.modules & bit(ModuleId::L)) != 0;
   const double tau = model ? p.model_time_constant_s : p.adaptive_time_constant_s;
-  const int settle = static_cast<int>(std::ceil(5 * tau / p.slow_period_s));
   const ModuleMask hold_mask = static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G));
   double worst_overshoot = -1e9, worst_sse = 0, depth_removed = 0;
   // Steady mean spindle power: from kPowerSettleRevolutions after a pass's
@@ -273,7 +300,8 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
       if (r.f_ref_n > 0) max_ratio = std::max(max_ratio, r.f_y_peak_n / r.f_ref_n);
       const bool engaged = !std::isnan(r.engagement_min) && r.engagement_min >= 0.99;
       settled = engaged ? settled + 1 : 0;
-      if (settled > settle && r.f_ref_n > 0) {
+      const double revolution_s = r.period_s > 0 ? r.period_s : p.slow_period_s;
+      if (settled > static_cast<int>(std::ceil(5 * tau / revolution_s)) && r.f_ref_n > 0) {
         err_sum += std::fabs(r.f_y_peak_n - r.f_ref_n) / r.f_ref_n;
         ++err_n;
       }
@@ -303,15 +331,10 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
 
   double hold_s = 0;
   for (const auto& r : run.revolutions) {
-    if ((r.active & bit(ModuleId::C)) != 0) hold_s += p.slow_period_s;
+    if ((r.active & bit(ModuleId::C)) != 0) hold_s += r.period_s;
   }
   sum.set_feed_hold_s(hold_s);
-  const int decimation =
-      run.samples.size() > 1 && run.ticks > 0
-          ? static_cast<int>(std::lround(static_cast<double>(run.ticks) /
-                                         static_cast<double>(run.samples.size())))
-          : 1;
-  const double onset = chatter_onset(run, p.samples_per_revolution, std::max(1, decimation));
+  const double onset = chatter_onset(run, p.slow_period_s);
   sum.set_chatter_onset_s(onset);
   sum.set_detection_delay_s(onset >= 0 && detected_t >= 0 ? detected_t - onset : -1);
   return sum;

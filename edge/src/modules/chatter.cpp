@@ -21,12 +21,17 @@ AutomaticChatterDetector::~AutomaticChatterDetector() = default;
 
 void AutomaticChatterDetector::configure(const EdgeParameters& p) {
   p_ = p;
-  const auto n = static_cast<size_t>(p.samples_per_revolution);
-  buffer_.assign(n, 0.0);
-  spectrum_.assign(n / 2 + 1, {});
-  // Run once so that the FFT plan and its scratch buffers exist before the
-  // loop starts: later calls of the same size do not allocate.
-  fft_->fft.fwd(spectrum_, buffer_);
+  const auto most = static_cast<size_t>(std::max(p.max_samples_per_revolution, 1));
+  buffer_.assign(most, 0.0);
+  spectrum_.assign(most / 2 + 1, {});
+  // A revolution has as many samples as the measured speed gives it, within
+  // the machine's speed range. Plan every FFT size of that range now, the
+  // largest last, so that the plans and the scratch buffers exist before the
+  // loop starts: later calls of these sizes do not allocate.
+  const int fewest = std::clamp(p.min_samples_per_revolution, 1, static_cast<int>(most));
+  for (int n = fewest; n <= static_cast<int>(most); ++n) {
+    fft_->fft.fwd(spectrum_.data(), buffer_.data(), n);
+  }
   reset();
 }
 
@@ -42,26 +47,32 @@ Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
   return Status::kOk;
 }
 
-double AutomaticChatterDetector::statistic(double spindle_rpm, double* frequency_hz) noexcept {
-  const size_t n = buffer_.size();
+double AutomaticChatterDetector::statistic(int samples, double spindle_rpm,
+                                           double* frequency_hz) noexcept {
+  if (frequency_hz != nullptr) *frequency_hz = 0;
+  const int fewest = std::max(p_.min_samples_per_revolution, 4);
+  if (samples < fewest || samples > static_cast<int>(buffer_.size())) return 0.0;
+  const auto n = static_cast<size_t>(samples);
   double mean = 0;
-  for (double v : buffer_) mean += v;
+  for (size_t i = 0; i < n; ++i) mean += buffer_[i];
   mean /= static_cast<double>(n);
   double ac_power = 0;
-  for (double& v : buffer_) {
-    v -= mean;
-    ac_power += v * v;
+  for (size_t i = 0; i < n; ++i) {
+    buffer_[i] -= mean;
+    ac_power += buffer_[i] * buffer_[i];
   }
   const double rms = std::sqrt(ac_power / static_cast<double>(n));
-  if (frequency_hz != nullptr) *frequency_hz = 0;
   if (rms < p_.chatter_min_rms_n) return 0.0;
 
-  fft_->fft.fwd(spectrum_, buffer_);
+  // One revolution's samples: when the speed is not a whole number of
+  // samples per revolution the window is the nearest whole count, and the
+  // bins lie within half a sample period's share of the spindle harmonics.
+  fft_->fft.fwd(spectrum_.data(), buffer_.data(), static_cast<Eigen::Index>(n));
   const double fs = 1.0 / p_.sample_period_s;
   const double df = fs / static_cast<double>(n);
   const double tooth_hz = p_.teeth * spindle_rpm / 60.0;
   double total = 0, chatter = 0, peak = 0;
-  for (size_t k = 1; k < spectrum_.size(); ++k) {
+  for (size_t k = 1; k <= n / 2; ++k) {
     const double e = std::norm(spectrum_[k]);
     total += e;
     const double f = static_cast<double>(k) * df;
@@ -78,14 +89,12 @@ double AutomaticChatterDetector::statistic(double spindle_rpm, double* frequency
 }
 
 Status AutomaticChatterDetector::update(Signals& s) noexcept {
-  if (filled_ < static_cast<int>(buffer_.size())) {
-    // A partial revolution (the detector was just activated): no decision.
-    filled_ = 0;
-    return Status::kOk;
-  }
-  double freq = 0;
-  const double ratio = statistic(s.spindle_rpm, &freq);
+  const int samples = filled_;
   filled_ = 0;
+  // A partial revolution (the detector was just activated): no decision.
+  if (samples != s.revolution_samples) return Status::kOk;
+  double freq = 0;
+  const double ratio = statistic(samples, s.spindle_rpm, &freq);
   if (!std::isfinite(ratio)) return Status::kError;
   s.chatter_ratio = ratio;
   s.chatter_frequency_hz = freq;

@@ -158,8 +158,16 @@ void ForceLaw::configure(double alpha, double min_fpt, double max_fpt, double ti
   alpha_ = alpha;
   u_min_ = std::pow(min_fpt, alpha);
   u_max_ = std::pow(max_fpt, alpha);
-  pole_ = std::exp(-period_s / time_constant_s);
+  time_constant_s_ = time_constant_s;
+  period_s_ = 0;
+  set_period(period_s);
   u_ = u_min_;
+}
+
+void ForceLaw::set_period(double period_s) noexcept {
+  if (period_s == period_s_ || !(period_s > 0)) return;
+  period_s_ = period_s;
+  pole_ = std::exp(-period_s / time_constant_s_);
 }
 
 void ForceLaw::start(double feed_per_tooth_mm) noexcept {
@@ -208,6 +216,7 @@ Status AdaptiveForceController::update(Signals& s) noexcept {
     law_.start(p_.feed_per_tooth_for(s.programmed_feedrate_mm_s, s.spindle_rpm));
     started_ = true;
   } else if (s.f_y_updated && s.gain_valid) {
+    law_.set_period(s.revolution_period_s);
     law_.step(s.f_y_peak_n, s.force_reference_n, s.gain_estimate, max_feed_now(p_, s.spindle_rpm));
   }
   s.controller_feed_per_tooth_mm = law_.feed_per_tooth();
@@ -242,6 +251,7 @@ Status ModelBasedForceController::update(Signals& s) noexcept {
     law_.start(std::min(model_feed, programmed));
     started_ = true;
   } else if (s.f_y_updated) {
+    law_.set_period(s.revolution_period_s);
     law_.step(s.f_y_peak_n, s.force_reference_n, gain, max_feed_now(p_, s.spindle_rpm));
   }
   s.controller_feed_per_tooth_mm = law_.feed_per_tooth();

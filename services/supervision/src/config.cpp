@@ -96,15 +96,11 @@ ValidatedConfig validate(const smc::config::SupervisorConfig& cfg, ModuleMask kn
                      "must be >= 0 N (got " + number(ps.force_reference_n()) + ")",
                      "use 0 to derive it from the power limit");
       }
-      if (ps.spindle_rpm() > 0) {
-        const double rev_s = 60.0 / ps.spindle_rpm();
-        if (std::fabs(rev_s - p.slow_period_s) > p.sample_period_s) {
-          problems.add(at + "spindle_rpm",
-                       number(ps.spindle_rpm()) + " rpm is a " + number(rev_s) +
-                           " s revolution, but operation.slow_period_s is " +
-                           number(p.slow_period_s),
-                       "make them agree");
-        }
+      if (ps.spindle_rpm() > 0 && ps.spindle_rpm() < p.min_spindle_rpm) {
+        problems.add(at + "spindle_rpm",
+                     number(ps.spindle_rpm()) + " rpm is below the machine's supervised range (" +
+                         number(p.min_spindle_rpm) + " rpm)",
+                     "raise the speed, or lower machine.min_spindle_rpm");
       }
     }
     PassSpec& spec = c.program.passes[static_cast<size_t>(i)];

@@ -1,5 +1,6 @@
 #include "smc/supervision/parameters.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -91,6 +92,12 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
                                    "set the axes' maximum feedrate, e.g. 36");
   p.max_spindle_rpm = m.positive("max_spindle_rpm", mc.max_spindle_rpm(),
                                  "set the spindle's maximum speed, e.g. 3000");
+  p.min_spindle_rpm =
+      mc.min_spindle_rpm() == 0
+          ? p.max_spindle_rpm / 4
+          : m.in_range(
+                "min_spindle_rpm", mc.min_spindle_rpm(), 1.0, p.max_spindle_rpm,
+                "set the lowest supervised spindle speed, e.g. 750 (0: max_spindle_rpm / 4)");
 
   const Checker o("supervisor_config.operation.", problems);
   const auto& op = cfg.operation();
@@ -182,6 +189,20 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   p.samples_per_fast = samples(p.fast_period_s, "fast_period_s");
   p.samples_per_revolution = samples(p.slow_period_s, "slow_period_s");
   p.samples_per_hold = static_cast<int>(std::round(p.suppression_hold_s / p.sample_period_s));
+  if (p.min_spindle_rpm > 0 && p.max_spindle_rpm >= p.min_spindle_rpm) {
+    p.max_samples_per_revolution =
+        std::max(p.samples_per_revolution,
+                 static_cast<int>(std::ceil(60.0 / p.min_spindle_rpm / p.sample_period_s - 1e-9)));
+    p.min_samples_per_revolution = std::max(
+        1, static_cast<int>(std::floor(60.0 / p.max_spindle_rpm / p.sample_period_s + 1e-9)));
+    if (p.max_samples_per_revolution > kMaxSamplesPerRevolution) {
+      m.fail("min_spindle_rpm",
+             "gives revolutions of " + std::to_string(p.max_samples_per_revolution) +
+                 " samples, more than the edge handles (" +
+                 std::to_string(kMaxSamplesPerRevolution) + ")",
+             p.min_spindle_rpm, "raise min_spindle_rpm or lengthen sample_period_s");
+    }
+  }
   return p;
 }
 

@@ -81,10 +81,22 @@ TEST(EdgeConfig, GrafcetActionOutsideTheModuleSetIsRefused) {
   expect_refused(cfg, "action 'L'");
 }
 
-TEST(EdgeConfig, SpindleSpeedMustMatchTheRevolutionPeriod) {
+TEST(EdgeConfig, SpindleSpeedBelowTheSupervisedRangeIsRefused) {
   auto cfg = test::shipped_config("smc2.textproto");
-  cfg.mutable_program()->mutable_passes(0)->set_spindle_rpm(1200);
-  expect_refused(cfg, "slow_period_s");
+  cfg.mutable_program()->mutable_passes(0)->set_spindle_rpm(700);  // range: 750-3000 rpm
+  expect_refused(cfg, "passes[0].spindle_rpm");
+  cfg.mutable_machine()->set_min_spindle_rpm(500);
+  EXPECT_NO_THROW((void)edge_config_from_proto(cfg));
+  cfg.mutable_machine()->set_min_spindle_rpm(3500);
+  expect_refused(cfg, "machine.min_spindle_rpm");
+}
+
+TEST(EdgeConfig, AnySpeedInTheRangeIsAcceptedWhateverTheSlowPeriod) {
+  // 1100 rpm is 109.09 samples per revolution at 0.5 ms: the revolution
+  // clock follows the measured speed, not slow_period_s.
+  auto cfg = test::shipped_config("smc2.textproto");
+  cfg.mutable_program()->mutable_passes(0)->set_spindle_rpm(1100);
+  EXPECT_NO_THROW((void)edge_config_from_proto(cfg));
 }
 
 TEST(ReplayDrive, MalformedRowsNameFileLineAndColumn) {

@@ -263,6 +263,7 @@ TEST(AutomaticChatterDetector, SeparatesToothHarmonicsFromChatter) {
   auto feed = [&](double chatter_amp) {
     Signals s;
     s.spindle_rpm = 1500;
+    s.revolution_samples = p.samples_per_revolution;
     for (int k = 0; k < p.samples_per_revolution; ++k) {
       const double t = k * dt;
       // Tooth passing at 100 Hz with harmonics, plus a 620 Hz chatter component.
@@ -287,12 +288,66 @@ TEST(AutomaticChatterDetector, SeparatesToothHarmonicsFromChatter) {
   EXPECT_TRUE(two.chatter_detected);
 }
 
+// 1100 rpm at 0.5 ms is 109.09 samples per revolution: the revolution clock
+// gives revolutions of 109 and 110 samples, and E judges each as it comes.
+TEST(AutomaticChatterDetector, JudgesRevolutionsThatAreNotAWholeNumberOfSamples) {
+  AutomaticChatterDetector e;
+  const EdgeParameters p = params();
+  e.configure(p);
+  const double dt = p.sample_period_s;
+  const double rpm = 1100, tooth_hz = p.teeth * rpm / 60.0;
+  double t = 0, phase = 0;
+  auto revolution = [&](double chatter_amp) {
+    Signals s;
+    s.spindle_rpm = rpm;
+    int n = 0;
+    for (;;) {
+      s.sample.f_z_n = 300 + 80 * std::sin(2 * std::numbers::pi * tooth_hz * t) +
+                       40 * std::sin(2 * std::numbers::pi * 2 * tooth_hz * t + 0.4) +
+                       20 * std::sin(2 * std::numbers::pi * 3 * tooth_hz * t + 1.1) +
+                       chatter_amp * std::sin(2 * std::numbers::pi * 620 * t + 1.0);
+      e.on_sample(s);
+      t += dt;
+      ++n;
+      phase += rpm / 60 * dt;
+      if (phase >= 1 - 1e-9) break;
+    }
+    phase -= 1;
+    s.revolution_samples = n;
+    EXPECT_TRUE(n == 109 || n == 110) << n;
+    e.update(s);
+    return s;
+  };
+  double worst = 0;
+  for (int r = 0; r < 20; ++r) worst = std::max(worst, revolution(0).chatter_ratio);
+  // The harmonics leak a little (the window is not exactly one revolution),
+  // far below the threshold.
+  EXPECT_LT(worst, 0.02 * p.chatter_threshold);
+  Signals one = revolution(120);
+  EXPECT_GT(one.chatter_ratio, p.chatter_threshold);
+  EXPECT_NEAR(one.chatter_frequency_hz, 620, 2000.0 / 109);
+  Signals two = revolution(120);
+  EXPECT_TRUE(two.chatter_detected);
+  // A revolution the detector saw only part of decides nothing.
+  e.reset();
+  Signals partial;
+  partial.spindle_rpm = rpm;
+  partial.revolution_samples = 110;
+  for (int k = 0; k < 50; ++k) {
+    partial.sample.f_z_n = 500 * std::sin(2.3 * k);
+    e.on_sample(partial);
+  }
+  e.update(partial);
+  EXPECT_EQ(partial.chatter_ratio, 0);
+}
+
 TEST(AutomaticChatterDetector, NoDecisionBelowTheRmsFloor) {
   AutomaticChatterDetector e;
   const EdgeParameters p = params();
   e.configure(p);
   Signals s;
   s.spindle_rpm = 1500;
+  s.revolution_samples = p.samples_per_revolution;
   for (int r = 0; r < 4; ++r) {
     for (int k = 0; k < p.samples_per_revolution; ++k) {
       s.sample.f_z_n = 0.1 * p.chatter_min_rms_n * std::sin(2.3 * k);  // air: noise only

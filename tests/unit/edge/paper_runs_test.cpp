@@ -264,8 +264,15 @@ TEST(PaperRuns, OperatorChatterSignalRunsTheSuppressionRoutine) {
   EXPECT_EQ(r->activity_mismatches, 0u) << r->first_mismatch;
 }
 
-TEST(PaperRuns, NoHeapAllocationAfterStartUp) {
+class NoHeapAllocation : public ::testing::TestWithParam<double> {};
+
+// At 1500 rpm a revolution is 80 samples; at 1100 rpm it is 109 or 110, and
+// module E uses FFT sizes it planned at configuration.
+TEST_P(NoHeapAllocation, AfterStartUp) {
   auto raw = test::shipped_config("smc2.textproto");
+  auto* pass = raw.mutable_program()->mutable_passes(0);
+  pass->set_feedrate_mm_s(pass->feedrate_mm_s() * GetParam() / pass->spindle_rpm());
+  pass->set_spindle_rpm(GetParam());
   EdgeConfig cfg = edge_config_from_proto(raw);
   SimulatedMill mill(raw.milling_model(), raw.simulation(), cfg.params.sample_period_s);
   EdgeCore core(cfg, mill);
@@ -276,7 +283,7 @@ TEST(PaperRuns, NoHeapAllocationAfterStartUp) {
   uint64_t events = 0;
   OperatorInputs op;
   smc::test::ForbidAllocations guard;
-  for (int i = 0; i < 200000 && !core.done(); ++i) {
+  for (int i = 0; i < 300000 && !core.done(); ++i) {
     if (i == 40000) {  // operator feed hold on and off, a chatter signal
       op.feed_hold = true;
       core.set_operator_inputs(op);
@@ -297,6 +304,46 @@ TEST(PaperRuns, NoHeapAllocationAfterStartUp) {
   EXPECT_TRUE(core.done());
   EXPECT_GT(events, 5u);
   EXPECT_EQ(violations, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(PaperRuns, NoHeapAllocation, ::testing::Values(1500.0, 1100.0),
+                         [](const auto& speed) {
+                           return std::to_string(static_cast<int>(speed.param)) + "rpm";
+                         });
+
+TEST(PaperRuns, RevolutionsFollowTheMeasuredSpindleSpeed) {
+  // SMC II's pass at 1100 rpm, same feed per tooth: 109.09 samples per
+  // revolution. The revolution clock makes revolutions of 109 and 110
+  // samples that keep time with the spindle; E still finds the chatter.
+  auto r = run_paper("smc2.textproto", {}, [](smc::config::SupervisorConfig& c) {
+    auto* pass = c.mutable_program()->mutable_passes(0);
+    pass->set_feedrate_mm_s(pass->feedrate_mm_s() * 1100 / 1500);
+    pass->set_spindle_rpm(1100);
+  });
+  const auto& s = r->summary;
+  EXPECT_TRUE(s.completed());
+  int short_revs = 0, long_revs = 0;
+  double turned = 0, elapsed = 0;
+  for (const auto& rev : r->run.revolutions) {
+    if (rev.spindle_rpm != 1100) continue;
+    const double n = rev.period_s / 0.0005;
+    if (std::fabs(n - 109) < 1e-6)
+      ++short_revs;
+    else if (std::fabs(n - 110) < 1e-6)
+      ++long_revs;
+    else
+      ADD_FAILURE() << "a revolution of " << n << " samples";
+    turned += 1;
+    elapsed += rev.period_s;
+  }
+  EXPECT_GT(short_revs, 100);
+  EXPECT_GT(long_revs, 5);
+  // Over many revolutions the clock loses less than one sample.
+  EXPECT_NEAR(elapsed, turned * 60.0 / 1100, 0.0005);
+  ASSERT_GE(s.chatter_onset_s(), 0);
+  ASSERT_GE(s.chatter_detected_s(), 0);
+  EXPECT_LE(s.detection_delay_s(), 3 * 60.0 / 1100) << "onset " << s.chatter_onset_s();
+  EXPECT_EQ(r->activity_mismatches, 0u) << r->first_mismatch;
 }
 
 // ---- bad samples and module errors end in feed hold with an event ----

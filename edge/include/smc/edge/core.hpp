@@ -73,6 +73,7 @@ struct EdgeEvent {
 // One record per spindle revolution (module I's period).
 struct RevolutionRecord {
   double t_s = 0;
+  double period_s = 0;  // how long the revolution took (the revolution clock)
   uint32_t revolution = 0;
   double f_y_peak_n = 0;
   double f_ref_n = 0;
@@ -183,6 +184,12 @@ class EdgeCore {
   bool fault_hold_ = false;
   uint32_t fault_releases_ = 0;
   uint64_t ticks_ = 0;
+  // The revolution clock: the share of a revolution turned since the last
+  // revolution tick, advanced each sample by the measured spindle speed.
+  double revolution_phase_ = 0;
+  int revolution_samples_ = 0;
+  // Advances the clock by one sample; true when a revolution ends here.
+  bool advance_revolution_clock() noexcept;
   uint32_t chatter_events_ = 0;
   double power_peak_w_ = 0;
   double power_sum_w_ = 0;

@@ -71,7 +71,8 @@ class OperatorChatterDetector final : public Module {
 };
 
 // E: automatic chatter detector. Collects the F_z samples of one spindle
-// revolution and computes their spectrum (Eigen's FFT). Chatter energy is the
+// revolution, as long as the core's revolution clock (the measured spindle
+// speed) makes it, and computes their spectrum (Eigen's FFT). Chatter energy is the
 // energy in the search band outside a guard band around each tooth-passing
 // harmonic; the statistic is its share of the total AC energy. d is set when
 // the statistic exceeds the threshold for `chatter_confirm_revolutions`
@@ -93,9 +94,10 @@ class AutomaticChatterDetector final : public Module {
   Status on_sample(Signals& s) noexcept override;
   Status update(Signals& s) noexcept override;
 
-  // The statistic for one revolution of samples (also used by tests and the
-  // detector study). Real-time safe after configure().
-  double statistic(double spindle_rpm, double* frequency_hz) noexcept;
+  // The statistic for the first `samples` samples of the buffer: one
+  // revolution (also used by tests and the detector study). 0 for a count
+  // outside the machine's speed range. Real-time safe after configure().
+  double statistic(int samples, double spindle_rpm, double* frequency_hz) noexcept;
 
  private:
   struct Fft;
@@ -233,6 +235,9 @@ class ForceLaw {
   void configure(double alpha, double min_fpt, double max_fpt, double time_constant_s,
                  double period_s) noexcept;
   void start(double feed_per_tooth_mm) noexcept;
+  // The time since the last step (one revolution at the measured speed);
+  // the pole follows it, so the closed loop keeps its time constant.
+  void set_period(double period_s) noexcept;
   // One step; returns the new feed per tooth. gain in N / (mm/tooth)^alpha.
   double step(double force_n, double reference_n, double gain, double max_fpt_now) noexcept;
   double feed_per_tooth() const noexcept;
@@ -240,6 +245,7 @@ class ForceLaw {
 
  private:
   double alpha_ = 1, u_ = 0, u_min_ = 0, u_max_ = 0, pole_ = 0;
+  double time_constant_s_ = 1, period_s_ = 0;
   double last_reference_n_ = 0;  // 0: none yet (no feedforward on the first step)
 };
 

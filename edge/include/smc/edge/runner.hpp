@@ -41,6 +41,7 @@ struct TraceSample {
   double f_ref_n;
   double feedrate_mm_s;
   double depth_mm;
+  double spindle_rpm;
   double power_w;
   double vibration_y_mm;
   double engagement;

@@ -53,6 +53,11 @@ struct Signals {
   bool force_reference_planned = false;  // the base is the pass's planned F_ref
   double spindle_power_w = 0;            // from the drive; NaN when it cannot tell
   bool in_pass = false;                  // the drive is executing a pass (not repositioning)
+  // The revolution that ended at this tick, from the core's revolution clock
+  // (the measured spindle speed): its samples and duration. Revolution-rate
+  // modules read them; between revolution ticks they keep the last values.
+  int revolution_samples = 0;
+  double revolution_period_s = 0;
 
   // --- B operator input monitor
   bool feed_hold_requested = false;     // receptivity a

@@ -34,11 +34,16 @@ double force_reference_n(double max_power_w, double cutter_radius_mm, double spi
 double feedrate_mm_s(double feed_per_tooth_mm, int teeth, double spindle_rpm) noexcept;
 double feed_per_tooth_mm(double feedrate_mm_s, int teeth, double spindle_rpm) noexcept;
 
+// The longest revolution, in samples, the edge's revolution-rate modules
+// handle (module E's buffer): 1024 is 0.5 s at 0.5 ms, 120 rpm.
+inline constexpr int kMaxSamplesPerRevolution = 1024;
+
 struct Parameters {
   // Fixed machine parameters.
   double max_spindle_power_w = 0;
   double max_feedrate_mm_s = 0;
   double max_spindle_rpm = 0;
+  double min_spindle_rpm = 0;  // 0 in the message: max_spindle_rpm / 4
   // Fixed operation parameters.
   double max_feed_per_tooth_mm = 0;
   double min_feed_per_tooth_mm = 0;
@@ -72,7 +77,10 @@ struct Parameters {
 
   // Derived, in samples.
   int samples_per_fast = 0;
-  int samples_per_revolution = 0;
+  int samples_per_revolution = 0;  // of slow_period_s: the clock while the spindle is still
+  // Most and fewest samples a revolution can have within the speed range.
+  int max_samples_per_revolution = 0;
+  int min_samples_per_revolution = 0;
   int samples_per_hold = 0;
 
   // F_ref at a spindle speed: the configured reference when one is given,
