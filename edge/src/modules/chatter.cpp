@@ -38,6 +38,7 @@ void AutomaticChatterDetector::configure(const EdgeParameters& p) {
 void AutomaticChatterDetector::reset() noexcept {
   filled_ = 0;
   above_ = 0;
+  previous_mean_ = 0;
 }
 
 Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
@@ -56,6 +57,7 @@ double AutomaticChatterDetector::statistic(int samples, double spindle_rpm,
   double mean = 0;
   for (size_t i = 0; i < n; ++i) mean += buffer_[i];
   mean /= static_cast<double>(n);
+  last_mean_ = mean;
   double ac_power = 0;
   for (size_t i = 0; i < n; ++i) {
     buffer_[i] -= mean;
@@ -71,6 +73,9 @@ double AutomaticChatterDetector::statistic(int samples, double spindle_rpm,
   const double fs = 1.0 / p_.sample_period_s;
   const double df = fs / static_cast<double>(n);
   const double tooth_hz = p_.teeth * spindle_rpm / 60.0;
+  // The bin nearest each tooth harmonic, at most: at low speeds the bins
+  // are closer than the configured guard.
+  const double guard = std::min(p_.harmonic_guard_hz, 0.6 * df);
   double total = 0, chatter = 0, peak = 0;
   for (size_t k = 1; k <= n / 2; ++k) {
     const double e = std::norm(spectrum_[k]);
@@ -78,7 +83,7 @@ double AutomaticChatterDetector::statistic(int samples, double spindle_rpm,
     const double f = static_cast<double>(k) * df;
     if (f < p_.chatter_band_low_hz || f > p_.chatter_band_high_hz) continue;
     const double nearest = tooth_hz > 0 ? std::round(f / tooth_hz) * tooth_hz : 0;
-    if (std::fabs(f - nearest) <= p_.harmonic_guard_hz) continue;
+    if (std::fabs(f - nearest) <= guard) continue;
     chatter += e;
     if (e > peak) {
       peak = e;
@@ -96,6 +101,16 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   double freq = 0;
   const double ratio = statistic(samples, s.spindle_rpm, &freq);
   if (!std::isfinite(ratio)) return Status::kError;
+  // Entering or leaving the part, or while a controller moves the feed
+  // fast, the mean force changes from one revolution to the next and the
+  // revolution is not a repetition of the one before: no decision then.
+  const double change = std::fabs(last_mean_ - previous_mean_);
+  const bool steady = previous_mean_ != 0 && change <= kMaxMeanChange * std::fabs(previous_mean_);
+  previous_mean_ = last_mean_;
+  if (!steady) {
+    s.chatter_ratio = 0;  // not judged
+    return Status::kOk;
+  }
   s.chatter_ratio = ratio;
   s.chatter_frequency_hz = freq;
   above_ = ratio > p_.chatter_threshold ? above_ + 1 : 0;

@@ -275,10 +275,11 @@ TEST(AutomaticChatterDetector, SeparatesToothHarmonicsFromChatter) {
     e.update(s);
     return s;
   };
+  // The first revolution has none before it to be compared with: no decision.
+  EXPECT_EQ(feed(0).chatter_ratio, 0);
   Signals stable = feed(0);
   EXPECT_LT(stable.chatter_ratio, 1e-6);
   EXPECT_FALSE(stable.chatter_detected);
-  e.reset();
   Signals one = feed(120);
   EXPECT_GT(one.chatter_ratio, p.chatter_threshold);
   EXPECT_NEAR(one.chatter_frequency_hz, 625, 12.5 + 1e-9);  // 25 Hz bins
@@ -339,6 +340,58 @@ TEST(AutomaticChatterDetector, JudgesRevolutionsThatAreNotAWholeNumberOfSamples)
   }
   e.update(partial);
   EXPECT_EQ(partial.chatter_ratio, 0);
+}
+
+// At 750 rpm the bins are 12.5 Hz apart, closer than the 15 Hz guard: only
+// the bin of each tooth harmonic is set aside, so chatter one bin from a
+// harmonic is still seen.
+TEST(AutomaticChatterDetector, AtLowSpeedTheGuardIsTheHarmonicsOwnBin) {
+  AutomaticChatterDetector e;
+  const EdgeParameters p = params();
+  e.configure(p);
+  const int n = 160;  // 750 rpm at 0.5 ms
+  Signals s;
+  s.spindle_rpm = 750;
+  s.revolution_samples = n;
+  for (int r = 0; r < 2; ++r) {
+    for (int k = 0; k < n; ++k) {
+      const double t = k * p.sample_period_s;
+      s.sample.f_z_n = 300 + 80 * std::sin(2 * std::numbers::pi * 50 * t) +
+                       120 * std::sin(2 * std::numbers::pi * 612.5 * t + 1.0);
+      e.on_sample(s);
+    }
+    e.update(s);
+  }
+  EXPECT_GT(s.chatter_ratio, p.chatter_threshold);
+  EXPECT_NEAR(s.chatter_frequency_hz, 612.5, 1e-9);
+}
+
+// Entering or leaving the part the mean force changes from one revolution to
+// the next; such a revolution is not judged, and does not break a count.
+TEST(AutomaticChatterDetector, NoDecisionWhileTheMeanForceChanges) {
+  AutomaticChatterDetector e;
+  const EdgeParameters p = params();
+  e.configure(p);
+  const double dt = p.sample_period_s;
+  auto feed = [&](double mean, double chatter_amp) {
+    Signals s;
+    s.spindle_rpm = 1500;
+    s.revolution_samples = p.samples_per_revolution;
+    for (int k = 0; k < p.samples_per_revolution; ++k) {
+      const double t = k * dt;
+      s.sample.f_z_n = mean + 80 * std::sin(2 * std::numbers::pi * 100 * t) +
+                       chatter_amp * std::sin(2 * std::numbers::pi * 620 * t + 1.0);
+      e.on_sample(s);
+    }
+    e.update(s);
+    return s;
+  };
+  feed(300, 0);
+  EXPECT_GT(feed(300, 120).chatter_ratio, p.chatter_threshold);  // judged: one above
+  const Signals jump = feed(200, 120);                           // mean -33 %: not judged
+  EXPECT_EQ(jump.chatter_ratio, 0);
+  EXPECT_FALSE(jump.chatter_detected);
+  EXPECT_TRUE(feed(205, 120).chatter_detected);  // the second judged revolution above
 }
 
 TEST(AutomaticChatterDetector, NoDecisionBelowTheRmsFloor) {

@@ -107,6 +107,8 @@ class AutomaticChatterDetector final : public Module {
   std::vector<std::complex<double>> spectrum_;
   int filled_ = 0;
   int above_ = 0;
+  double last_mean_ = 0, previous_mean_ = 0;
+  static constexpr double kMaxMeanChange = 0.1;
 };
 
 // G: chatter suppression routine: run F (the core rewrites the program),
