@@ -24,8 +24,26 @@ struct SimulateArgs {
   std::vector<double> chatter_at;
   std::string replay;
   double max_time_s = 600;
+  double feed_lag_ms = -1;  // < 0: as the configuration says
+  double plant_gain = 1;
   bool quiet = false;
 };
+
+// The simulated mill's cutting coefficients times `gain`: a plant whose
+// force per chip differs from the models the configuration carries.
+void scale_cutting_law(smc::config::MillingModel& m, double gain) {
+  auto* law = m.mutable_law();
+  if (law->has_power_law()) {
+    auto* p = law->mutable_power_law();
+    p->mutable_cutting()->set_coefficient_kn_per_mm2(p->cutting().coefficient_kn_per_mm2() * gain);
+    p->mutable_thrust()->set_coefficient_kn_per_mm2(p->thrust().coefficient_kn_per_mm2() * gain);
+  } else if (law->has_linear()) {
+    auto* l = law->mutable_linear();
+    l->set_k_t_n_per_mm2(l->k_t_n_per_mm2() * gain);
+    l->set_k_n_n_per_mm2(l->k_n_n_per_mm2() * gain);
+    l->set_k_a_n_per_mm2(l->k_a_n_per_mm2() * gain);
+  }
+}
 
 EdgeConfig load_config(const std::string& path, smc::config::SupervisorConfig& raw) {
   try {
@@ -85,10 +103,23 @@ void add_simulate(CLI::App& app) {
       ->check(CLI::ExistingFile);
   sub->add_option("--max-time", args->max_time_s, "Stop after this many seconds")
       ->capture_default_str();
+  sub->add_option("--feed-lag-ms", args->feed_lag_ms,
+                  "Feed drive lag of the simulated mill (first-order time constant, ms); "
+                  "default: the configuration's simulation.feed_drive_lag_s")
+      ->check(CLI::Range(0.0, 1000.0));
+  sub->add_option("--plant-gain", args->plant_gain,
+                  "Scale the simulated mill's cutting coefficients (a plant that is not the "
+                  "model: L's force model and the plan stay as configured)")
+      ->check(CLI::Range(0.05, 20.0))
+      ->capture_default_str();
   sub->add_flag("--quiet", args->quiet, "Print nothing but errors");
   sub->callback([args] {
     smc::config::SupervisorConfig raw;
     EdgeConfig cfg = load_config(args->config, raw);
+    if (args->feed_lag_ms >= 0) {
+      raw.mutable_simulation()->set_feed_drive_lag_s(args->feed_lag_ms / 1000.0);
+    }
+    if (args->plant_gain != 1) scale_cutting_law(*raw.mutable_milling_model(), args->plant_gain);
     RunOptions opts;
     opts.max_time_s = args->max_time_s;
     for (const auto& spec : args->feed_holds) {

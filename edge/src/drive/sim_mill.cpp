@@ -69,6 +69,8 @@ struct SimulatedMill::Impl {
   int pass = 0;
   Phase phase = Phase::kDone;
   double reposition_left_s = 0;
+  double axis_feed_mm_s = 0;  // the feed axis's speed (after the drive's lag)
+  double lag_gain = 1;        // 1 - exp(-dt / lag) per sample; 1 = no lag
   double time_s = 0;
   double start_x = 0;
 
@@ -117,6 +119,7 @@ struct SimulatedMill::Impl {
 
   void begin_reposition(double from_x) noexcept {
     phase = Phase::kRepositioning;
+    axis_feed_mm_s = 0;  // the next pass starts from rest
     const double rapid = options.rapid_feedrate_mm_s() > 0 ? options.rapid_feedrate_mm_s() : 36;
     reposition_left_s = std::fabs(from_x - start_x) / rapid;
   }
@@ -136,8 +139,14 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
     if (hz < 0) throw ConfigError("simulation: anti-alias cut-off frequencies must be >= 0");
   }
   if (sim.noise_rms_n() < 0) throw ConfigError("simulation.noise_rms_n: must be >= 0");
+  const double lag = sim.feed_drive_lag_s();
+  if (!(lag >= 0 && lag <= 1)) {
+    throw ConfigError("simulation.feed_drive_lag_s: must be in [0, 1] s (got " +
+                      std::to_string(lag) + "); fix: 0 for none, e.g. 0.02");
+  }
   impl_ = std::make_unique<Impl>(std::move(m), sim, sample_period_s);
   Impl& s = *impl_;
+  s.lag_gain = lag > 0 ? 1.0 - std::exp(-sample_period_s / lag) : 1.0;
   const auto steps = static_cast<std::size_t>(s.sim.steps_per_sample());
   s.trace_x.assign(steps, 0.0);
   s.trace_y.assign(steps, 0.0);
@@ -203,7 +212,8 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   in.spindle_rpm = spec.spindle_rpm;
   const double target = s.program.depth_before(pass + 1);
   if (s.phase == Phase::kCutting) {
-    in.feedrate_mm_s = std::max(0.0, feedrate_cmd_mm_s);
+    s.axis_feed_mm_s += s.lag_gain * (std::max(0.0, feedrate_cmd_mm_s) - s.axis_feed_mm_s);
+    in.feedrate_mm_s = s.lag_gain == 1.0 ? std::max(0.0, feedrate_cmd_mm_s) : s.axis_feed_mm_s;
     // The chip depth where the leading edge meets material left by earlier passes.
     const double edge = std::min(s.length(), s.sim.tool_position_mm() + s.radius());
     in.depth_mm = std::max(0.0, target - s.removed_at(std::max(0.0, edge)));

@@ -452,3 +452,46 @@ TEST(Faults, OverrunHoldsTheFeed) {
   EXPECT_EQ(core.fault(), Fault::kOverrun);
   EXPECT_EQ(core.signals().feedrate_cmd_mm_s, 0);
 }
+
+// The simulated feed drive: with simulation.feed_drive_lag_s the axis follows
+// the command as a first-order lag (a hold too); without it, at once.
+TEST(SimulatedFeedDrive, FollowsTheCommandThroughAFirstOrderLag) {
+  auto raw = test::shipped_config("smc2.textproto");
+  EdgeConfig cfg = edge_config_from_proto(raw);
+  const double dt = cfg.params.sample_period_s, lag = 0.02;
+  auto applied = [&](double lag_s, double command, int holds_after) {
+    raw.mutable_simulation()->set_feed_drive_lag_s(lag_s);
+    SimulatedMill mill(raw.milling_model(), raw.simulation(), dt);
+    mill.load(cfg.program);
+    DriveSample out;
+    std::vector<double> feed;
+    for (int i = 0; i < 400000 && feed.size() < 200; ++i) {
+      const bool hold = holds_after >= 0 && static_cast<int>(feed.size()) >= holds_after;
+      EXPECT_EQ(mill.step(hold ? 0.0 : command, out), Status::kOk);
+      if (out.in_pass) feed.push_back(out.feedrate_mm_s);
+    }
+    return feed;
+  };
+  const auto direct = applied(0, 10, -1);
+  ASSERT_EQ(direct.size(), 200u);
+  EXPECT_EQ(direct.front(), 10.0);
+  const auto lagged = applied(lag, 10, 100);
+  ASSERT_EQ(lagged.size(), 200u);
+  const double g = 1 - std::exp(-dt / lag);
+  for (size_t k = 0; k < 100; ++k) {
+    EXPECT_NEAR(lagged[k], 10 * (1 - std::pow(1 - g, static_cast<double>(k + 1))), 1e-9) << k;
+  }
+  // 40 samples = one time constant: 63 % of the step.
+  EXPECT_NEAR(lagged[39] / 10, 1 - std::exp(-1.0), 1e-3);
+  // The hold decelerates the axis through the same lag.
+  for (size_t k = 100; k < 200; ++k) {
+    EXPECT_NEAR(lagged[k], lagged[99] * std::pow(1 - g, static_cast<double>(k - 99)), 1e-9) << k;
+  }
+  raw.mutable_simulation()->set_feed_drive_lag_s(-0.01);
+  try {
+    SimulatedMill bad(raw.milling_model(), raw.simulation(), dt);
+    ADD_FAILURE() << "a negative lag was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("simulation.feed_drive_lag_s"), std::string::npos);
+  }
+}
