@@ -76,10 +76,7 @@ void EdgeService::Impl::use_mill_model(smc::config::SupervisorConfig& cfg) const
   if (opt.mill_model_file.empty()) return;
   smc::config::MillingModel own;
   smc::documents::load(opt.mill_model_file, own);
-  if (cfg.milling_model().has_cutter()) *own.mutable_cutter() = cfg.milling_model().cutter();
-  if (cfg.milling_model().has_workpiece())
-    *own.mutable_workpiece() = cfg.milling_model().workpiece();
-  *cfg.mutable_milling_model() = own;
+  use_plant_model(*cfg.mutable_milling_model(), std::move(own));
 }
 
 // Runs on the intake thread: reads only `opt` (fixed) and its argument.

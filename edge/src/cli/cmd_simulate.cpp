@@ -23,6 +23,7 @@ struct SimulateArgs {
   std::vector<std::string> feed_holds;
   std::vector<double> chatter_at;
   std::string replay;
+  std::string mill_model;
   double max_time_s = 600;
   double feed_lag_ms = -1;  // < 0: as the configuration says
   double plant_gain = 1;
@@ -101,6 +102,11 @@ void add_simulate(CLI::App& app) {
   sub->add_option("--replay", args->replay,
                   "Play recorded force from this CSV instead of simulating the mill")
       ->check(CLI::ExistingFile);
+  sub->add_option("--mill-model", args->mill_model,
+                  "Simulate this mill (a MillingModel textproto: structure and cutting law; the\n"
+                  "configuration's cutter and workpiece are kept) instead of the configuration's\n"
+                  "milling_model: a plant that is not the models the plan was made from")
+      ->check(CLI::ExistingFile);
   sub->add_option("--max-time", args->max_time_s, "Stop after this many seconds")
       ->capture_default_str();
   sub->add_option("--feed-lag-ms", args->feed_lag_ms,
@@ -118,6 +124,15 @@ void add_simulate(CLI::App& app) {
     EdgeConfig cfg = load_config(args->config, raw);
     if (args->feed_lag_ms >= 0) {
       raw.mutable_simulation()->set_feed_drive_lag_s(args->feed_lag_ms / 1000.0);
+    }
+    if (!args->mill_model.empty()) {
+      smc::config::MillingModel plant;
+      try {
+        smc::documents::load(args->mill_model, plant);
+      } catch (const smc::documents::DocumentError& e) {
+        throw Failure(2, e.what());
+      }
+      use_plant_model(*raw.mutable_milling_model(), std::move(plant));
     }
     if (args->plant_gain != 1) scale_cutting_law(*raw.mutable_milling_model(), args->plant_gain);
     RunOptions opts;

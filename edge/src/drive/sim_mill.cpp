@@ -13,6 +13,12 @@
 
 namespace smc::edge {
 
+void use_plant_model(smc::config::MillingModel& configured, smc::config::MillingModel plant) {
+  if (configured.has_cutter()) *plant.mutable_cutter() = configured.cutter();
+  if (configured.has_workpiece()) *plant.mutable_workpiece() = configured.workpiece();
+  configured = std::move(plant);
+}
+
 namespace {
 
 // Second-order Butterworth low-pass by the bilinear transform (with

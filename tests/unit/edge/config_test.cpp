@@ -28,7 +28,8 @@ void expect_refused(const smc::config::SupervisorConfig& cfg, const std::string&
 }  // namespace
 
 TEST(EdgeConfig, ShippedConfigurationsAreValid) {
-  for (const char* name : {"no_control.textproto", "smc1.textproto", "smc2.textproto"}) {
+  for (const char* name :
+       {"no_control.textproto", "smc1.textproto", "smc1_guarded.textproto", "smc2.textproto"}) {
     EXPECT_NO_THROW((void)edge_config_from_proto(test::shipped_config(name))) << name;
   }
 }

@@ -88,7 +88,7 @@ smc::config::SupervisorConfig smc1_with_m() {
 }  // namespace
 
 TEST(ModuleDeclarations, PaperRunsStayWithinTheirDeclaredWrites) {
-  for (const char* name : {"smc1.textproto", "smc2.textproto"}) {
+  for (const char* name : {"smc1.textproto", "smc1_guarded.textproto", "smc2.textproto"}) {
     const auto raw = test::shipped_config(name);
     const EdgeConfig cfg = edge_config_from_proto(raw);
     SimulatedMill mill(raw.milling_model(), raw.simulation(), cfg.params.sample_period_s);

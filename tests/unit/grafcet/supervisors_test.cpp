@@ -41,6 +41,20 @@ std::string smc2_modules(std::uint32_t step) {
   return m;
 }
 
+// Guarded SMC I rules (cell/grafcets/smc1_guarded.grafcet): SMC I's, with E
+// beside L while in contact (step 4) and SMC II's suppression routine: B
+// unless step 6, I and J unless step 5 or 6, G in step 6.
+std::string smc1_guarded_modules(std::uint32_t step) {
+  std::string m = "A";
+  if (step != 6) m += "B";
+  if (step != 5 && step != 6) m += "IJ";
+  if (step == 4) m += "EL";
+  if (step == 6) m += "G";
+  if (step == 5) m += "C";
+  std::sort(m.begin(), m.end());
+  return m;
+}
+
 class Supervisor {
  public:
   Supervisor(const char* file, std::string (*rules)(std::uint32_t))
@@ -112,6 +126,40 @@ TEST(Smc1Supervisor, FeedHoldWinsOverContactAndContactLoss) {
   s.step("a", 5);  // contact lost and feed hold together in step 4: (5) before (7)
 }
 
+TEST(Smc1GuardedSupervisor, ChatterDetectedInContactRunsTheSuppressionThenL) {
+  Supervisor s("smc1_guarded.grafcet", smc1_guarded_modules);
+  // Start-up: E and L initialised in step 1, then step 2.
+  s.step("", 2, "EL");
+  // Contact: 2 -> 3 (E and L reset) -> 4, the cut under L watched by E.
+  s.step("b", 4, "EL");
+  s.step("b", 4);
+  // Chatter detected: the routine G (F's rewrite, the feed held); L stops.
+  s.step("b d", 6);
+  s.step("b d", 6);
+  // Complete while b and d are still set (J and E inactive): back through 2
+  // and 3 to 4 with E and L reset; the stale d is not chatter again.
+  s.step("b d e", 4, "EL");
+  s.step("b", 4);
+  // Complete without contact: step 2.
+  s.step("b d", 6);
+  s.step("d e", 2);
+  // The operator's chatter signal is SMC II's (module D): not read here.
+  s.step("b", 4, "EL");
+  s.step("b c", 4);
+  // Feed hold wins over chatter; contact loss wins over chatter.
+  s.step("a b d", 5);
+  s.step("b", 4, "EL");
+  s.step("d", 2);
+  // Chatter outside contact does nothing.
+  s.step("d", 2);
+  s.step("", 2);
+  // A feed hold during the routine waits for its end (B is inactive).
+  s.step("b", 4, "EL");
+  s.step("b d", 6);
+  s.step("a b", 6);
+  s.step("a b e", 5);
+}
+
 TEST(Smc2Supervisor, SituationsOfThePaper) {
   Supervisor s("smc2.grafcet", smc2_modules);
   // Start-up: E and K initialised in step 1, then step 2.
@@ -173,10 +221,12 @@ TEST(Smc2Supervisor, Priorities) {
 
 // Random input sequences: the rules hold at every evaluation.
 TEST(Smc2Supervisor, RulesHoldOnRandomInputSequences) {
-  for (const char* file : {"smc1.grafcet", "smc2.grafcet"}) {
+  for (const char* file : {"smc1.grafcet", "smc1_guarded.grafcet", "smc2.grafcet"}) {
     const Grafcet g = testing::load_ok(file);
     Engine e(g);
-    auto rules = std::string(file) == "smc1.grafcet" ? smc1_modules : smc2_modules;
+    auto rules = std::string(file) == "smc1.grafcet"           ? smc1_modules
+                 : std::string(file) == "smc1_guarded.grafcet" ? smc1_guarded_modules
+                                                               : smc2_modules;
     std::mt19937_64 rng(12345);
     Mask in = 0;
     for (int i = 0; i < 20000; ++i) {

@@ -1,6 +1,6 @@
-// The verifier passes the paper's two supervisors and catches every seeded
-// defect, with a shortest input sequence that the Engine replays to the
-// same situation.
+// The verifier passes the shipped supervisors (the paper's two and the
+// guarded SMC I) and catches every seeded defect, with a shortest input
+// sequence that the Engine replays to the same situation.
 
 #include "smc/grafcet/verifier.hpp"
 
@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "grafcet_test_util.hpp"
 
@@ -42,7 +43,7 @@ Evaluation replay(const Grafcet& g, const std::vector<PathStep>& path) {
 }
 
 TEST(GrafcetVerifier, PaperSupervisorsPass) {
-  for (const char* file : {"smc1.grafcet", "smc2.grafcet"}) {
+  for (const char* file : {"smc1.grafcet", "smc1_guarded.grafcet", "smc2.grafcet"}) {
     const Grafcet g = load_ok(file);
     const Report r = verify(g);
     EXPECT_TRUE(r.ok()) << format_report(g, r);
@@ -59,6 +60,59 @@ TEST(GrafcetVerifier, PaperSupervisorsPass) {
     const std::string text = format_report(g, r);
     EXPECT_NE(text.find("PASS: no violation"), std::string::npos) << text;
   }
+}
+
+std::string read_text(const std::string& file) {
+  std::ostringstream buffer;
+  buffer << std::ifstream(testing::grafcet_path(file)).rdbuf();
+  return buffer.str();
+}
+
+// The statements of a Grafcet text: comments and blank lines dropped.
+std::vector<std::string> statements(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    out.push_back(line);
+  }
+  return out;
+}
+
+// A mutated copy of the guarded SMC I: L left active in the suppression
+// step. Refused on the two invariants that say so, with the path contact ->
+// chatter detected, which the engine replays to X6 with L and G active.
+TEST(GrafcetVerifier, GuardedSmcOneWithLDuringTheRoutineIsRefused) {
+  const std::string file = "broken/smc1_guarded_l_in_routine.grafcet";
+  // The copy differs from the shipped supervisor in its name and step 6 only.
+  const auto shipped = statements(read_text("smc1_guarded.grafcet"));
+  const auto broken = statements(read_text(file));
+  ASSERT_EQ(shipped.size(), broken.size());
+  std::vector<std::string> differ;
+  for (std::size_t i = 0; i < shipped.size(); ++i) {
+    if (shipped[i] != broken[i]) differ.push_back(broken[i]);
+  }
+  ASSERT_EQ(differ.size(), 2u);
+  EXPECT_EQ(differ[0].rfind("grafcet broken_smc1_guarded ", 0), 0u) << differ[0];
+  EXPECT_EQ(differ[1], "step 6 \"chatter suppression routine\":    A, G, L");
+
+  const Grafcet g = load_ok(file);
+  const Report r = verify(g);
+  ASSERT_EQ(checks_of(r), std::set<Check>{Check::kInvariant}) << format_report(g, r);
+  std::set<std::string> violated;
+  for (const Violation& v : r.violations) violated.insert(v.subject);
+  EXPECT_EQ(violated, (std::set<std::string>{
+                          "invariant \"L while in contact (step 4)\"",
+                          "invariant \"force controller never during the routine's hold\""}));
+  const Violation& v = r.violations[0];
+  ASSERT_EQ(v.path.size(), 2u);
+  EXPECT_EQ(v.path[0].inputs, testing::inputs(g, "b"));
+  EXPECT_EQ(v.path[1].inputs, testing::inputs(g, "b d"));
+  const Evaluation last = replay(g, v.path);
+  const Mask l = Mask{1} << g.action_index("L");
+  const Mask gg = Mask{1} << g.action_index("G");
+  EXPECT_EQ(last.level_actions & (l | gg), l | gg);
+  EXPECT_NE(format_report(g, r).find("FAIL: 2 violations"), std::string::npos);
 }
 
 TEST(GrafcetVerifier, SeededConflict) {

@@ -57,7 +57,8 @@ TEST(Conversions, ForceReferenceIsPowerOverCuttingSpeed) {
 }
 
 TEST(Validate, ShippedConfigurationsAreValidAndCarryTheirBoundGrafcet) {
-  for (const char* name : {"no_control.textproto", "smc1.textproto", "smc2.textproto"}) {
+  for (const char* name :
+       {"no_control.textproto", "smc1.textproto", "smc1_guarded.textproto", "smc2.textproto"}) {
     const sv::ValidatedConfig c = sv::validate(shipped(name));
     ASSERT_TRUE(c.grafcet) << name;
     EXPECT_GT(c.program.count, 0) << name;
@@ -65,6 +66,7 @@ TEST(Validate, ShippedConfigurationsAreValidAndCarryTheirBoundGrafcet) {
   }
   // G brings F (the routine runs the suppressor).
   EXPECT_TRUE(sv::has(sv::validate(shipped("smc2.textproto")).modules, sv::ModuleId::F));
+  EXPECT_TRUE(sv::has(sv::validate(shipped("smc1_guarded.textproto")).modules, sv::ModuleId::F));
 }
 
 TEST(Validate, EveryProblemIsListedWithItsFieldAndFix) {
@@ -135,7 +137,7 @@ TEST(GrafcetBudget, TheShippedSupervisorsFitWithinAHundredthOfIt) {
   sv::CheckBudget budget;
   budget.max_time = std::chrono::milliseconds{0};
   budget.max_work = 5'000;
-  for (const char* name : {"smc1.textproto", "smc2.textproto"}) {
+  for (const char* name : {"smc1.textproto", "smc1_guarded.textproto", "smc2.textproto"}) {
     const auto cfg = shipped(name);
     EXPECT_NO_THROW(
         (void)sv::bind_grafcet(cfg.grafcet_text(), cfg.grafcet_name(), sv::kPaperModules, budget))

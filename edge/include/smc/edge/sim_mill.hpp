@@ -23,6 +23,12 @@ class SimulatedMill;
 
 namespace smc::edge {
 
+// A plant that is not the model: `plant`'s structure and cutting law in
+// place of `configured`'s, keeping the configured cutter and workpiece (the
+// job's geometry) where `configured` has them. `smc-edge run --mill-model`
+// and `smc-edge simulate --mill-model` simulate their mill this way.
+void use_plant_model(smc::config::MillingModel& configured, smc::config::MillingModel plant);
+
 class SimulatedMill final : public Drive {
  public:
   // Not real-time. Throws ConfigError naming the field for a bad model.
