@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <optional>
@@ -59,19 +60,19 @@ class Cell : public ::testing::Test {
                                            db_, "--partition", partition_, "--edge-grace-ms",
                                            "1500"});
   }
-  void start_edge(const std::string& machine) {
+  void start_edge(const std::string& machine,
+                  const std::string& mill_model = "cell/models/paper_face_mill.textproto") {
     edges_[machine].reset();
     edges_[machine].emplace(std::vector<std::string>{
         bin("smc-edge"), "--log-level", "warn", "run", "--machine", machine, "--partition",
         partition_, "--speedup", "8", "--lease-ms", "1000", "--no-realtime", "--mill-model",
-        src("cell/models/paper_face_mill.textproto"), "--state-file",
-        (dir_ / (machine + ".journal")).string()});
+        src(mill_model), "--state-file", (dir_ / (machine + ".journal")).string()});
   }
   std::string submit(const std::string& file) {
     auto before = jobs();
-    EXPECT_EQ(
-        run_cmd({bin("smc-cell"), "--log-level", "warn", "job", "submit", src(file), "--db", db_}),
-        0);
+    EXPECT_EQ(run_cmd({bin("smc-cell"), "--log-level", "warn", "job", "submit",
+                       file.front() == '/' ? file : src(file), "--db", db_}),
+              0);
     for (const auto& j : jobs()) {
       bool known = false;
       for (const auto& b : before) known = known || b.id == j.id;
@@ -117,7 +118,7 @@ class Cell : public ::testing::Test {
 
 int count_to(const std::vector<store::JobEvent>& ev, cfg::JobState s) {
   int n = 0;
-  for (const auto& e : ev) n += e.to_state == s ? 1 : 0;
+  for (const auto& e : ev) n += e.to_state == s && !e.is_note() ? 1 : 0;
   return n;
 }
 
@@ -148,6 +149,69 @@ TEST_F(Cell, DemoJobsCompleteWithTheExpectedSmcChoice) {
   EXPECT_EQ(a.result->chatter_events(), 0u);
   EXPECT_EQ(a.attempt, 1u);
   EXPECT_EQ(b.attempt, 1u);
+}
+
+// mill-1 differs from the models the cell holds for it
+// (paper_face_mill_mismatched: tool 25 % less stiff, 30 % less damped,
+// material 20 % harder), mill-2 is as its models say. The transfer-line part
+// is planned SMC I for mill-1 from mill-1's models; the cut chatters; the
+// guarded supervisor detects and suppresses it; the cell records the event
+// and marks the plan's models suspect. The part's next job is planned from
+// mill-2's models and goes only to mill-2, though mill-1 is idle; a job
+// pinned to mill-1 runs there under SMC II, the explanation naming the
+// suspect models.
+TEST_F(Cell, ChatterUnderSmcIMarksItsModelsSuspectAndThePartMovesToAMachineWhoseModelsHold) {
+  start_cell();
+  start_edge("mill-1", "cell/models/paper_face_mill_mismatched.textproto");
+  start_edge("mill-2");
+  const std::string first = submit("cell/jobs/transfer_line.textproto");
+  ASSERT_TRUE(wait_jobs(
+      {first}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
+  const auto a = *job(first);
+  ASSERT_EQ(a.state, cfg::JOB_DONE) << a.explanation;
+  EXPECT_EQ(a.variant, cfg::SMC_I);
+  EXPECT_EQ(a.planned_for, "mill-1");
+  EXPECT_EQ(a.machine_id, "mill-1");
+  EXPECT_EQ(a.plan->grafcet_name(), "smc1_guarded.grafcet");
+  ASSERT_TRUE(a.result.has_value());
+  EXPECT_GE(a.result->chatter_events(), 1u) << "the mismatched mill chatters at the planned depth";
+  EXPECT_GT(a.result->passes_completed(), 2u) << "the suppressor added a pass";
+  bool noted = false;
+  for (const auto& e : events(first)) {
+    noted = noted || (e.is_note() && e.reason.find("marked suspect") != std::string::npos);
+  }
+  EXPECT_TRUE(noted) << "the job's history records the chatter and the suspicion";
+  {
+    auto db = store::Store::open(db_, store::OpenMode::kExisting);
+    for (const char* id : {"bracket-tl.mill-1.force", "bracket-tl.mill-1.milling"}) {
+      const auto m = db.model(id);
+      ASSERT_TRUE(m);
+      EXPECT_NE(m->suspect_reason.find(first), std::string::npos)
+          << id << ": " << m->suspect_reason;
+    }
+    EXPECT_TRUE(db.model("bracket-tl.mill-2.milling")->suspect_reason.empty());
+  }
+
+  const std::string second = submit("cell/jobs/transfer_line.textproto");
+  const auto pinned_file = dir_ / "pinned.textproto";
+  {
+    std::ofstream f(pinned_file);
+    f << "part_id: \"bracket-tl\"\nmachine_id: \"mill-1\"\n";
+  }
+  const std::string pinned = submit(pinned_file.string());
+  ASSERT_TRUE(wait_jobs(
+      {second, pinned}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
+  const auto b = *job(second);
+  EXPECT_EQ(b.state, cfg::JOB_DONE);
+  EXPECT_EQ(b.variant, cfg::SMC_I) << b.explanation;
+  EXPECT_EQ(b.planned_for, "mill-2");
+  EXPECT_EQ(b.machine_id, "mill-2") << "a plan from mill-2's models runs only on mill-2";
+  EXPECT_EQ(b.result->chatter_events(), 0u);
+  const auto c = *job(pinned);
+  EXPECT_EQ(c.state, cfg::JOB_DONE);
+  EXPECT_EQ(c.variant, cfg::SMC_II) << c.explanation;
+  EXPECT_EQ(c.machine_id, "mill-1");
+  EXPECT_NE(c.explanation.find("is suspect"), std::string::npos) << c.explanation;
 }
 
 TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {

@@ -1,5 +1,6 @@
 #include "smc/cell/planner.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -16,54 +17,166 @@ namespace smc::cell {
 
 namespace {
 
+bool usable(const store::ProcessModel& m) { return m.validated && m.suspect_reason.empty(); }
+
 std::string describe(const store::ProcessModel& m) {
   std::ostringstream o;
   o << store::kind_name(m.kind) << " model " << m.id << " (" << store::provenance_name(m.provenance)
     << (m.validated ? ", validated" : ", not validated")
-    << (m.part_id.empty() ? "" : ", part " + m.part_id) << ")";
+    << (m.part_id.empty() ? "" : ", part " + m.part_id) << ", " << m.machine_id
+    << (m.suspect_reason.empty() ? "" : ", suspect: " + m.suspect_reason) << ")";
   return o.str();
 }
+
+// Why no model of this kind can be used.
+std::string missing(const std::vector<store::ProcessModel>& models, store::ModelKind kind,
+                    const char* name) {
+  for (const auto& m : models) {
+    if (m.kind == kind && m.validated && !m.suspect_reason.empty()) {
+      return std::string("the ") + name + " model " + m.id + " is suspect";
+    }
+  }
+  return std::string("no validated ") + name + " model";
+}
+
+std::string fmt(double v, int digits = 3) {
+  std::ostringstream o;
+  o.precision(digits);
+  o << v;
+  return o.str();
+}
+
+// The models on `machine` that make SMC I: validated and not suspect.
+struct Usable {
+  std::optional<store::ProcessModel> force, milling;
+  bool smc1() const { return force && milling; }
+};
+
+Usable usable_on(const std::vector<store::ProcessModel>& models, const std::string& machine) {
+  Usable u;
+  if (machine.empty()) return u;
+  for (const auto& m : models) {
+    if (!usable(m) || m.machine_id != machine) continue;
+    if (m.kind == store::ModelKind::kForceProcess && !u.force) u.force = m;
+    if (m.kind == store::ModelKind::kMilling && !u.milling) u.milling = m;
+  }
+  return u;
+}
+
+// Why these models do not make SMC I.
+std::string why_not(const std::vector<store::ProcessModel>& models, const Usable& u) {
+  if (!u.force && !u.milling) {
+    const std::string f = missing(models, store::ModelKind::kForceProcess, "force-process");
+    const std::string m = missing(models, store::ModelKind::kMilling, "structural");
+    return f == "no validated force-process model" && m == "no validated structural model"
+               ? std::string("no validated models")
+               : f + " and " + m;
+  }
+  if (!u.force) return missing(models, store::ModelKind::kForceProcess, "force-process");
+  return missing(models, store::ModelKind::kMilling, "structural");
+}
+
+std::string listing(const std::vector<store::ProcessModel>& models) {
+  std::string out;
+  for (const auto& m : models) out += (out.empty() ? "" : "; ") + describe(m);
+  return out.empty() ? "none" : out;
+}
+
+const char* const kSmc1Why =
+    " (transfer line): a validated force-process model and a validated structural model of this "
+    "machine exist, so the plan is made chatter-free by time-domain simulation and the force is "
+    "held by the model-based controller.";
+const char* const kSmc2Why =
+    ", so the job runs as programmed with chatter detection and suppression and the adaptive "
+    "force controller.";
 
 }  // namespace
 
 Selection select_variant(const PlanInputs& in) {
   Selection sel;
   std::ostringstream why;
-  why << "models for tool " << in.tool.id << " and material " << in.part.material_id << ": ";
-  if (in.models.empty()) why << "none";
-  for (size_t i = 0; i < in.models.size(); ++i) {
-    const auto& m = in.models[i];
-    why << (i ? "; " : "") << describe(m);
-    if (!m.validated) continue;
-    if (m.kind == store::ModelKind::kForceProcess && !sel.force) sel.force = m;
-    if (m.kind == store::ModelKind::kMilling && !sel.milling) sel.milling = m;
-  }
-  why << ". ";
-  if (sel.force && sel.milling) {
+  const std::string on = in.machine.id.empty() ? "any machine" : in.machine.id;
+  why << "models on " << on << " for tool " << in.tool.id << " and material " << in.part.material_id
+      << ": " << listing(in.models) << ". ";
+  const Usable u = usable_on(in.models, in.machine.id);
+  if (u.smc1()) {
     sel.variant = smc::config::SMC_I;
-    why << "SMC I (transfer line): a validated force-process model and a validated structural "
-           "model exist, so the plan is made chatter-free by time-domain simulation and the "
-           "force is held by the model-based controller.";
+    sel.force = u.force;
+    sel.milling = u.milling;
+    why << "SMC I on " << in.machine.id << kSmc1Why;
   } else {
     sel.variant = smc::config::SMC_II;
-    why << "SMC II (job shop): ";
-    if (!sel.force && !sel.milling)
-      why << "no validated models";
-    else if (!sel.force)
-      why << "no validated force-process model";
-    else
-      why << "no validated structural model";
-    why << ", so the job runs as programmed with chatter detection and suppression and the "
-           "adaptive force controller.";
+    why << "SMC II on " << on << " (job shop): "
+        << (in.machine.id.empty() ? std::string("no machine was given") : why_not(in.models, u))
+        << kSmc2Why;
   }
   sel.explanation = why.str();
   return sel;
 }
 
-Planner::Planner(const std::string& grafcet_dir, smc::config::SupervisorConfig defaults)
+Selection bind_and_select(PlanInputs& in, const std::vector<MachineModels>& machines) {
+  const std::string& pinned = in.job.spec.machine_id();
+  std::vector<const MachineModels*> order;
+  for (const auto& m : machines) {
+    if (pinned.empty() || m.machine.id == pinned) order.push_back(&m);
+  }
+  auto bind = [&in](const MachineModels& m) {
+    in.machine = m.machine;
+    in.models = m.models;
+    return select_variant(in);
+  };
+  if (!pinned.empty()) {
+    if (!order.empty()) return bind(*order.front());
+    in.machine = {};
+    in.models.clear();
+    return select_variant(in);
+  }
+  // SMC I on an available machine; if none is available, on the first
+  // machine that has the models (it waits for that machine).
+  bool any_available = false;
+  for (const MachineModels* m : order) any_available = any_available || m->available;
+  for (const MachineModels* m : order) {
+    if ((m->available || !any_available) && usable_on(m->models, m->machine.id).smc1())
+      return bind(*m);
+  }
+  // Else SMC II on whichever machine is free, each machine's reason given.
+  in.machine = {};
+  in.models.clear();
+  std::ostringstream reasons;
+  for (const MachineModels* m : order) {
+    in.models.insert(in.models.end(), m->models.begin(), m->models.end());
+    const Usable u = usable_on(m->models, m->machine.id);
+    reasons << (m == order.front() ? "" : "; ") << m->machine.id << ": "
+            << (u.smc1() ? std::string("has usable models but its edge is lost")
+                         : why_not(m->models, u));
+  }
+  Selection sel;
+  sel.variant = smc::config::SMC_II;
+  std::ostringstream why;
+  why << "models on every machine for tool " << in.tool.id << " and material "
+      << in.part.material_id << ": " << listing(in.models) << ". SMC II on any machine (job shop): "
+      << (order.empty() ? std::string("no machines") : reasons.str()) << kSmc2Why;
+  sel.explanation = why.str();
+  return sel;
+}
+
+Planner::Planner(const std::string& grafcet_dir, smc::config::SupervisorConfig defaults,
+                 PlannerOptions options)
     : smc1_text_(smc::documents::read_file(grafcet_dir + "/smc1.grafcet")),
+      smc1_guarded_text_(smc::documents::read_file(grafcet_dir + "/smc1_guarded.grafcet")),
       smc2_text_(smc::documents::read_file(grafcet_dir + "/smc2.grafcet")),
-      defaults_(std::move(defaults)) {}
+      defaults_(std::move(defaults)),
+      options_(options) {}
+
+namespace {
+
+// Stable (no margin) at this depth and feed, by the time-domain criterion.
+bool stable_at(const smc::machining::MillingModel& mach, double rpm, double fpt, double depth) {
+  return smc::machining::assess_stability(mach, {rpm, fpt, depth}).verdict ==
+         smc::machining::Verdict::stable;
+}
+
+}  // namespace
 
 Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
   const auto t0 = std::chrono::steady_clock::now();
@@ -94,9 +207,21 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
   prog->set_total_depth_mm(job.depth_mm());
   int passes = 1;
   if (sel.variant == smc::config::SMC_I) {
-    c.set_grafcet_name("smc1.grafcet");
-    c.set_grafcet_text(smc1_text_);
-    for (const char* m : {"A", "B", "C", "I", "J", "L", "M"}) c.add_modules(m);
+    if (!sel.force || !sel.milling || in.machine.id.empty()) {
+      throw std::runtime_error("job " + in.job.id +
+                               ": an SMC I plan needs the machine and its validated models");
+    }
+    out.machine_id = in.machine.id;
+    out.model_ids = {sel.force->id, sel.milling->id};
+    if (options_.guard_smc1) {
+      c.set_grafcet_name("smc1_guarded.grafcet");
+      c.set_grafcet_text(smc1_guarded_text_);
+      for (const char* m : {"A", "B", "C", "E", "F", "G", "I", "J", "L", "M"}) c.add_modules(m);
+    } else {
+      c.set_grafcet_name("smc1.grafcet");
+      c.set_grafcet_text(smc1_text_);
+      for (const char* m : {"A", "B", "C", "I", "J", "L", "M"}) c.add_modules(m);
+    }
     *c.mutable_force_model() = sel.force->force;
     smc::config::MillingModel model = sel.milling->milling;
     *model.mutable_cutter() = mm->cutter();
@@ -115,18 +240,80 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
     }
     // Unbounded and stable somewhere: stable up to the search's maximum depth.
     out.critical_depth_mm = crit.bounded ? crit.critical_depth_mm : so.max_depth_mm;
+    const double margin = options_.margin;
     const double allowed = margin * out.critical_depth_mm;
-    passes = std::max(1, static_cast<int>(std::ceil(job.depth_mm() / allowed - 1e-9)));
-    if (passes > smc::supervision::kMaxPasses) {
-      throw std::runtime_error("job " + in.job.id + ": the critical depth " +
-                               std::to_string(out.critical_depth_mm) + " mm would need " +
-                               std::to_string(passes) + " passes (at most " +
-                               std::to_string(smc::supervision::kMaxPasses) + ")");
+    const int first = std::max(1, static_cast<int>(std::ceil(job.depth_mm() / allowed - 1e-9)));
+    auto too_many = [&](int n, const std::string& why) {
+      return std::runtime_error("job " + in.job.id + ": " + why + " would need " +
+                                std::to_string(n) + " passes (at most " +
+                                std::to_string(smc::supervision::kMaxPasses) + ")");
+    };
+    if (first > smc::supervision::kMaxPasses) {
+      throw too_many(first, "the critical depth " + fmt(out.critical_depth_mm) + " mm");
+    }
+    // The feeds the model-based controller may command on this machine: it
+    // starts at min(programmed, equilibrium), settles at the eq. 1
+    // equilibrium feed for the pass's F_ref, and in transients may go down
+    // to its lower clamp. With power-law pressures the critical depth falls
+    // with the feed, so the pass must be stable with the margin at the
+    // lowest steady feed and stable (no margin) at the clamp; the clamp is
+    // raised for that, up to max_clamp_share of the steady feed, before a
+    // pass is added.
+    const auto& fm = sel.force->force;
+    const double clamp0 = op->min_feed_per_tooth_mm();
+    const double fmax = op->max_feed_per_tooth_mm();
+    std::string feed_note;
+    for (passes = first;; ++passes) {
+      if (passes > smc::supervision::kMaxPasses) {
+        throw too_many(passes, "keeping every pass stable at the feeds the controller commands");
+      }
+      const double depth = job.depth_mm() / passes;
+      const double fref = force_reference_n(c, in.machine.max_spindle_power_w, depth, rpm, fpt);
+      const double feq = std::clamp(
+          std::pow(fref / (1000.0 * fm.k_kn() * std::pow(depth, fm.beta())), 1.0 / fm.alpha()),
+          clamp0, fmax);
+      const double steady = std::min(fpt, feq);
+      if (steady < fpt && !stable_at(mach, rpm, steady, depth / margin)) continue;
+      double clamp = clamp0;
+      if (!stable_at(mach, rpm, clamp0, depth)) {
+        // Lowest stable feed in [clamp0, share x steady], by bisection
+        // (the critical depth grows with the feed).
+        double hi = options_.max_clamp_share * steady;
+        if (hi <= clamp0 || !stable_at(mach, rpm, hi, depth)) continue;
+        double lo = clamp0;
+        while (hi - lo > 0.02 * hi) {
+          const double mid = 0.5 * (lo + hi);
+          (stable_at(mach, rpm, mid, depth) ? hi : lo) = mid;
+        }
+        clamp = hi;
+      }
+      op->set_min_feed_per_tooth_mm(clamp);
+      out.programmed_feed_mm = fpt;
+      out.equilibrium_feed_mm = feq;
+      out.lower_clamp_mm = clamp;
+      std::ostringstream n;
+      n << " Feeds checked on " << in.machine.id << ": programmed " << fmt(fpt)
+        << " mm/tooth, equilibrium " << fmt(feq) << " mm/tooth at F_ref " << fmt(fref)
+        << " N (eq. 1); " << fmt(depth) << " mm passes are stable with the margin at "
+        << fmt(steady) << " mm/tooth and down to the controller's lower clamp of " << fmt(clamp)
+        << " mm/tooth"
+        << (clamp > clamp0 ? " (raised from " + fmt(clamp0) + ": the lowest stable feed)" : "")
+        << (passes > first ? "; " + std::to_string(passes - first) +
+                                 " pass(es) added for the feeds below the programmed one"
+                           : "")
+        << ".";
+      feed_note = n.str();
+      break;
     }
     std::ostringstream why;
-    why << c.explanation() << " Critical depth at " << rpm << " rpm: " << out.critical_depth_mm
-        << " mm; with a " << margin << " margin, " << passes << " equal pass"
-        << (passes == 1 ? "" : "es") << " of " << job.depth_mm() / passes << " mm.";
+    why << c.explanation() << " Critical depth at " << rpm << " rpm on " << in.machine.id << ": "
+        << fmt(out.critical_depth_mm) << " mm; with a " << margin << " margin, " << passes
+        << " equal pass" << (passes == 1 ? "" : "es") << " of " << fmt(job.depth_mm() / passes)
+        << " mm." << feed_note;
+    if (options_.guard_smc1) {
+      why << " The chatter detector watches the cut (smc1_guarded): chatter means the models "
+             "are wrong; it is suppressed and the models are marked suspect.";
+    }
     c.set_explanation(why.str());
   } else {
     c.set_grafcet_name("smc2.grafcet");

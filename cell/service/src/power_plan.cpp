@@ -25,20 +25,26 @@ double power_force_ratio(const smc::config::MillingModel& model, double depth_mm
   return r.mean_power_w / (v * r.max_abs_fy_n);
 }
 
-void plan_force_references(smc::config::SupervisorConfig& c) {
-  if (c.variant() != smc::config::SMC_I || !c.has_milling_model()) return;
+double force_reference_n(const smc::config::SupervisorConfig& c, double max_spindle_power_w,
+                         double depth_mm, double spindle_rpm, double feed_per_tooth_mm) {
   const auto& op = c.operation();
   const double target = op.power_target_fraction() > 0 ? op.power_target_fraction() : 0.95;
   const double safety = op.force_safety_factor() > 0 ? op.force_safety_factor() : 1.0;
-  const double limit = target * c.machine().max_spindle_power_w() / safety;
-  const int teeth = static_cast<int>(op.teeth());
+  const double limit = target * max_spindle_power_w / safety;
+  const double rho = power_force_ratio(c.milling_model(), depth_mm, spindle_rpm, feed_per_tooth_mm);
+  const double v = smc::supervision::cutting_speed_m_s(op.cutter_radius_mm(), spindle_rpm);
+  return limit / (v * rho);
+}
+
+void plan_force_references(smc::config::SupervisorConfig& c) {
+  if (c.variant() != smc::config::SMC_I || !c.has_milling_model()) return;
+  const int teeth = static_cast<int>(c.operation().teeth());
+  const double power = c.machine().max_spindle_power_w();
   for (auto& pass : *c.mutable_program()->mutable_passes()) {
     const double fpt =
         smc::supervision::feed_per_tooth_mm(pass.feedrate_mm_s(), teeth, pass.spindle_rpm());
-    const double rho =
-        power_force_ratio(c.milling_model(), pass.depth_mm(), pass.spindle_rpm(), fpt);
-    const double v = smc::supervision::cutting_speed_m_s(op.cutter_radius_mm(), pass.spindle_rpm());
-    pass.set_force_reference_n(limit / (v * rho));
+    pass.set_force_reference_n(
+        force_reference_n(c, power, pass.depth_mm(), pass.spindle_rpm(), fpt));
   }
 }
 

@@ -7,12 +7,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <optional>
 #include <set>
 #include <vector>
 
+#include "smc/cell/candidates.hpp"
 #include "smc/cell/dispatch.hpp"
 #include "smc/cell/planner.hpp"
 #include "smc/cell/store/store.hpp"
@@ -116,7 +118,7 @@ struct CellService::Impl {
   std::map<std::string, Mill> mills;
   std::map<std::string, Progress> progress;                             // by job id
   std::map<std::string, std::vector<machining::ForceSample>> learning;  // by job id
-  std::set<uint64_t> chatter_seen;
+  std::set<std::string> chatter_seen;                                   // "<machine>#<event id>"
   std::map<std::string, std::string> out_on;  // machine -> job whose assignment was sent
   int64_t data_version = -1;
   Clock::time_point started = Clock::now();
@@ -126,7 +128,8 @@ struct CellService::Impl {
       : opt(std::move(o)),
         lock(opt.db_path),
         db(store::Store::open(opt.db_path, store::OpenMode::kExisting)),
-        planner(opt.grafcet_dir, load_defaults(opt.defaults_file)),
+        planner(opt.grafcet_dir, load_defaults(opt.defaults_file),
+                PlannerOptions{.guard_smc1 = opt.guard_smc1}),
         participant({.domain_id = opt.domain_id, .partition = opt.partition}),
         config_writer(participant),
         job_writer(participant),
@@ -236,25 +239,29 @@ struct CellService::Impl {
   void plan_queued() {
     for (const auto& j : db.jobs({.state = cfg::JOB_QUEUED, .with_documents = true})) {
       try {
-        PlanInputs in{j, *db.part(j.spec.part_id()), *db.tool(j.spec.tool_id()), {}};
-        // Models are stored per machine: take those of the job's machine, or any machine.
-        std::set<std::string> seen;
-        for (const auto& m : db.machines()) {
-          if (!j.spec.machine_id().empty() && m.id != j.spec.machine_id()) continue;
-          for (auto& pm : db.find_models(m.id, in.tool.id, in.part.material_id, in.part.id)) {
-            if (seen.insert(pm.id).second) in.models.push_back(std::move(pm));
-          }
-          if (!in.models.empty()) break;
-        }
-        const Selection sel = select_variant(in);
+        // Bound to the machine whose models it uses (SMC I; machines whose
+        // edge is not given up preferred), or to none (SMC II: any free mill).
+        Selection sel;
+        const auto now = Clock::now();
+        const PlanInputs in = bind_job(db, j, sel, [&](const std::string& id) {
+          const auto it = mills.find(id);
+          return it != mills.end() && !edge_lost_past_grace(it->second.alive, it->second.lost_since,
+                                                            started, now, opt.edge_grace);
+        });
         const Plan plan = planner.plan(in, sel);
         // Verify now: the configuration the edge will get must be valid.
-        const store::Machine m =
-            *db.machine(j.spec.machine_id().empty() ? mills.begin()->first : j.spec.machine_id());
-        (void)smc::supervision::validate(Planner::for_machine(plan.config, m, "check"));
-        db.set_plan(j.id, sel.variant, plan.config.explanation(), plan.config);
+        auto check_on = in.machine;
+        if (check_on.id.empty()) {
+          const auto all = db.machines();
+          if (all.empty()) throw std::runtime_error("the database has no machines");
+          check_on = all.front();
+        }
+        (void)smc::supervision::validate(Planner::for_machine(plan.config, check_on, "check"));
+        db.set_plan(j.id, sel.variant, plan.config.explanation(), plan.config, plan.machine_id,
+                    plan.model_ids);
         move(*db.job(j.id), cfg::JOB_PLANNED,
-             std::string(store::variant_name(sel.variant)) + " planned in " +
+             std::string(store::variant_name(sel.variant)) +
+                 (plan.machine_id.empty() ? "" : " for " + plan.machine_id) + " planned in " +
                  std::to_string(static_cast<int>(plan.planning_s * 1000)) + " ms");
       } catch (const std::exception& e) {
         spdlog::error("job {}: cannot be planned: {}", j.id, e.what());
@@ -277,7 +284,9 @@ struct CellService::Impl {
     const auto planned = db.jobs({.state = cfg::JOB_PLANNED, .with_documents = true});
     std::vector<PlannedJob> candidates;
     for (const auto& j : planned) {
-      candidates.push_back({j.id, j.spec.priority(), j.spec.machine_id(), j.attempt});
+      // A plan made from one machine's models goes only to that machine.
+      const std::string& on = j.spec.machine_id().empty() ? j.planned_for : j.spec.machine_id();
+      candidates.push_back({j.id, j.spec.priority(), on, j.attempt});
     }
     std::vector<MillView> views;
     for (const auto& [id, mill] : mills) {
@@ -451,12 +460,53 @@ struct CellService::Impl {
 
   void take_chatter() {
     chatter_reader.take([&](const smc_data_ChatterEvent& e, const tr::SampleInfo& info) {
-      if (!info.valid_data || !chatter_seen.insert(e.event_id).second) return;
-      spdlog::warn("{}: chatter ({}) at {:.0f} Hz in job {}, program now {} passes",
-                   get_string(e.machine_id),
-                   e.source == smc_data_CHATTER_AUTOMATIC ? "automatic" : "operator",
-                   e.frequency_hz, get_string(e.job_id), e.new_pass_count);
+      if (!info.valid_data) return;
+      const std::string machine = get_string(e.machine_id);
+      if (!chatter_seen.insert(machine + "#" + std::to_string(e.event_id)).second) return;
+      const bool automatic = e.source == smc_data_CHATTER_AUTOMATIC;
+      spdlog::warn("{}: chatter ({}) at {:.0f} Hz in job {}, program now {} passes", machine,
+                   automatic ? "automatic" : "operator", e.frequency_hz, get_string(e.job_id),
+                   e.new_pass_count);
+      try {
+        record_chatter(e, machine, automatic);
+      } catch (const std::exception& ex) {
+        spdlog::error("{}: chatter event {} not recorded: {}", machine, e.event_id, ex.what());
+      }
     });
+  }
+
+  // A chatter event goes into its job's history. Under SMC I the plan was
+  // made chatter-free from the machine's models, so automatic chatter is
+  // evidence against them: the models the plan used are marked suspect, and
+  // later jobs for the part are planned without them (SMC II) until someone
+  // validates them again.
+  void record_chatter(const smc_data_ChatterEvent& e, const std::string& machine, bool automatic) {
+    const auto j = db.job(get_string(e.job_id));
+    if (!j) return;
+    const std::string tag = "chatter event " + std::to_string(e.event_id) + " on " + machine;
+    for (const auto& ev : db.events(j->id)) {
+      if (ev.reason.rfind(tag + ":", 0) == 0) return;  // recorded before a restart
+    }
+    char what[160];
+    std::snprintf(what, sizeof what, "%s at %.0f Hz in pass %u (detector statistic %.2f)",
+                  automatic ? "detected" : "signalled by the operator",
+                  static_cast<double>(e.frequency_hz), e.pass_index + 1u,
+                  static_cast<double>(e.energy_ratio));
+    std::string reason =
+        tag + ": " + what + "; program now " + std::to_string(e.new_pass_count) + " passes";
+    if (automatic && j->variant == cfg::SMC_I) {
+      const auto models = db.plan_models(j->id);
+      const std::string why = "the SMC I plan of job " + j->id + " made from it chattered on " +
+                              machine + " (" + what + ")";
+      for (const auto& id : models) db.mark_model_suspect(id, why);
+      std::string ids;
+      for (const auto& id : models) ids += (ids.empty() ? "" : ", ") + id;
+      reason += "; the plan was made chatter-free from models " + (ids.empty() ? "(none)" : ids) +
+                ", so they are marked suspect and later jobs for part " + j->spec.part_id() +
+                " are planned without them";
+      spdlog::warn("job {}: models {} marked suspect", j->id, ids);
+    }
+    db.note_event(j->id, reason);
   }
 
   // ---------------------------------------------------------- learning --

@@ -57,8 +57,9 @@ void print_job(const store::Job& j, const std::vector<store::JobEvent>& events) 
       std::snprintf(depth, sizeof depth, "%g mm", p.depth_mm());
       passes += (passes.empty() ? "" : ", ") + std::string(depth);
     }
-    std::printf("            configuration '%s', %d passes%s%s\n", j.plan->config_id().c_str(),
-                prog.passes_size(), passes.empty() ? "" : ": ", passes.c_str());
+    std::printf("            configuration '%s', %d passes%s%s; for %s\n",
+                j.plan->config_id().c_str(), prog.passes_size(), passes.empty() ? "" : ": ",
+                passes.c_str(), j.planned_for.empty() ? "any machine" : j.planned_for.c_str());
   }
   if (j.result) {
     const auto& r = *j.result;
@@ -74,6 +75,11 @@ void print_job(const store::Job& j, const std::vector<store::JobEvent>& events) 
                                  ? std::string("(new)")
                                  : std::string(store::state_name(e.from_state));
     const std::string on = e.to_state == smc::config::JOB_ASSIGNED ? " [" + e.machine_id + "]" : "";
+    if (e.is_note()) {  // the state did not change
+      std::printf("    %2lld  %s  %-26s %s\n", static_cast<long long>(e.seq),
+                  store::format_time(e.time_ms).c_str(), "(note)", e.reason.c_str());
+      continue;
+    }
     std::printf("    %2lld  %s  %-11s -> %-11s %s%s\n", static_cast<long long>(e.seq),
                 store::format_time(e.time_ms).c_str(), from.c_str(),
                 std::string(store::state_name(e.to_state)).c_str(), e.reason.c_str(), on.c_str());

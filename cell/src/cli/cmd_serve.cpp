@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "registry.hpp"
+#include "smc/cell/candidates.hpp"
 #include "smc/cell/planner.hpp"
 #include "smc/cell/service.hpp"
 #include "smc/cell/store/job_file.hpp"
@@ -48,6 +49,10 @@ SMC_CELL_COMMAND(serve, 10) {
       ->capture_default_str();
   sub->add_option("--max-attempts", opt->max_attempts, "Attempts before an interrupted job fails")
       ->capture_default_str();
+  sub->add_flag(
+      "--paper-smc1", [opt](std::int64_t) { opt->guard_smc1 = false; },
+      "Run SMC I jobs under the paper's smc1.grafcet (no chatter detector) instead of\n"
+      "smc1_guarded.grafcet, which watches the cut and marks the plan's models suspect on chatter");
   sub->callback([opt, data, grace_ms] {
     const std::string dir = data_dir(*data);
     opt->grafcet_dir = dir + "/grafcets";
@@ -69,13 +74,19 @@ SMC_CELL_COMMAND(plan, 11) {
   auto db_path = std::make_shared<std::string>(smc::cell::store::default_db_path());
   auto data = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
+  auto paper_smc1 = std::make_shared<bool>(false);
   CLI::App* sub = app.add_subcommand(
-      "plan", "Select SMC I or SMC II for a job and plan it, without running it");
+      "plan",
+      "Select SMC I or SMC II for a job and the machine whose models it uses, and plan it,\n"
+      "without running it");
   sub->add_option("JOB", *job_ref, "A job file (textproto or JSON) or the id of a stored job")
       ->required();
   sub->add_option("--db", *db_path, "Cell database")->capture_default_str();
   sub->add_option("--data", *data, "Folder with grafcets/ and configs/");
   sub->add_option("--out", *out, "Write the planned SupervisorConfig here (textproto)");
+  sub->add_flag("--paper-smc1", *paper_smc1,
+                "Plan SMC I jobs for the paper's smc1.grafcet (no chatter detector) instead of "
+                "smc1_guarded.grafcet");
   sub->callback([=] {
     const std::string dir = data_dir(*data);
     auto db = smc::cell::store::Store::open(*db_path, smc::cell::store::OpenMode::kExisting);
@@ -102,19 +113,22 @@ SMC_CELL_COMMAND(plan, 11) {
     }
     smc::config::SupervisorConfig defaults;
     smc::documents::load(dir + "/configs/defaults.textproto", defaults);
-    smc::cell::Planner planner(dir + "/grafcets", defaults);
-    smc::cell::PlanInputs in{job, *db.part(job.spec.part_id()), *db.tool(job.spec.tool_id()), {}};
-    for (const auto& m : db.machines()) {
-      if (!job.spec.machine_id().empty() && m.id != job.spec.machine_id()) continue;
-      in.models = db.find_models(m.id, in.tool.id, in.part.material_id, in.part.id);
-      if (!in.models.empty()) break;
-    }
-    const auto sel = smc::cell::select_variant(in);
-    std::fprintf(stderr, "planning ...\n");
+    smc::cell::Planner planner(dir + "/grafcets", defaults,
+                               smc::cell::PlannerOptions{.guard_smc1 = !*paper_smc1});
+    smc::cell::Selection sel;
+    const auto in = smc::cell::bind_job(db, job, sel);
+    std::fprintf(stderr, "planning %s for %s ...\n",
+                 std::string(smc::cell::store::variant_name(sel.variant)).c_str(),
+                 in.machine.id.empty() ? "any machine" : in.machine.id.c_str());
     const auto plan = planner.plan(in, sel);
     std::printf("%s\n", plan.config.explanation().c_str());
+    std::printf("machine: %s\n", plan.machine_id.empty() ? "any" : plan.machine_id.c_str());
     std::printf("passes:");
     for (const auto& p : plan.config.program().passes()) std::printf(" %.3f mm", p.depth_mm());
+    if (!plan.machine_id.empty()) {
+      std::printf("\nfeeds (mm/tooth): programmed %.4f, equilibrium %.4f, lower clamp %.4f",
+                  plan.programmed_feed_mm, plan.equilibrium_feed_mm, plan.lower_clamp_mm);
+    }
     std::printf("\nplanned in %.2f s\n", plan.planning_s);
     if (!out->empty()) {
       std::FILE* f = std::fopen(out->c_str(), "w");

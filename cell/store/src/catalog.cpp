@@ -65,7 +65,7 @@ const char* const kPartCols =
     "total_depth_mm, feedrate_mm_s, spindle_rpm FROM parts ";
 const char* const kModelCols =
     "SELECT id, kind, machine_id, tool_id, material_id, COALESCE(part_id, ''), provenance, "
-    "validated, document, fit, note, created_at_ms FROM process_models ";
+    "validated, document, fit, note, created_at_ms, suspect_reason FROM process_models ";
 
 Machine read_machine(const Stmt& s) {
   return Machine{s.text(0), s.text(1), s.real(2), s.real(3), s.real(4)};
@@ -98,6 +98,7 @@ ProcessModel read_model(const Stmt& s, const std::string& file) {
   if (!s.is_null(9)) detail::deserialize(s.blob(9), m.fit, file, what + " fit");
   m.note = s.text(10);
   m.created_at_ms = s.int64(11);
+  m.suspect_reason = s.text(12);
   return m;
 }
 
@@ -287,11 +288,11 @@ std::string Store::add_model(const ProcessModel& m) {
   }
   Stmt ins(db_.get(), path_,
            "INSERT INTO process_models (id, kind, machine_id, tool_id, material_id, part_id, "
-           "provenance, validated, document, fit, note, created_at_ms) "
-           "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+           "provenance, validated, document, fit, note, created_at_ms, suspect_reason) "
+           "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   ins.bind(id, static_cast<int>(m.kind), m.machine_id, m.tool_id, m.material_id, or_null(m.part_id),
            static_cast<int>(m.provenance), m.validated, Blob{document}, fit, m.note,
-           detail::now_ms());
+           detail::now_ms(), m.suspect_reason);
   ins.run();
   tx.commit();
   return id;
@@ -317,9 +318,26 @@ void Store::set_model_validated(const std::string& id, bool validated) {
     m->milling.set_validated(validated);
     document = detail::serialize(m->milling, "milling model");
   }
-  Stmt(db_.get(), path_, "UPDATE process_models SET validated = ?, document = ? WHERE id = ?")
+  // Validating a model again clears a suspicion.
+  Stmt(db_.get(), path_,
+       "UPDATE process_models SET validated = ?1, document = ?2, "
+       "suspect_reason = CASE WHEN ?1 THEN '' ELSE suspect_reason END WHERE id = ?3")
       .bind(validated, Blob{document}, id)
       .run();
+  tx.commit();
+}
+
+void Store::mark_model_suspect(const std::string& id, const std::string& reason) {
+  if (reason.empty()) {
+    throw StoreError(path_ + ": mark_model_suspect: model '" + id + "': the reason is empty");
+  }
+  detail::Tx tx(db_.get(), path_);
+  Stmt(db_.get(), path_, "UPDATE process_models SET suspect_reason = ? WHERE id = ?")
+      .bind(reason, id)
+      .run();
+  if (sqlite3_changes(db_.get()) == 0) {
+    throw StoreError(path_ + ": mark_model_suspect: unknown model '" + id + "'");
+  }
   tx.commit();
 }
 
@@ -332,7 +350,7 @@ std::vector<ProcessModel> Store::find_models(const std::string& machine_id,
              "WHERE (?1 = '' OR machine_id = ?1) AND (?2 = '' OR tool_id = ?2) "
              "AND (?3 = '' OR material_id = ?3) "
              "AND (?4 = '' OR part_id = ?4 OR part_id IS NULL) "
-             "ORDER BY (part_id IS NULL), validated DESC, "
+             "ORDER BY (part_id IS NULL), validated DESC, (suspect_reason != ''), "
              "CASE provenance WHEN 3 THEN 0 WHEN 2 THEN 1 WHEN 1 THEN 2 ELSE 3 END, "
              "created_at_ms DESC, rowid DESC");
   s.bind(machine_id, tool_id, material_id, part_id);

@@ -286,23 +286,66 @@ std::optional<JobEvent> Store::transition(const std::string& job_id, JobState fr
 }
 
 void Store::set_plan(const std::string& job_id, smc::config::SmcVariant variant,
-                     const std::string& explanation, const smc::config::SupervisorConfig& plan) {
+                     const std::string& explanation, const smc::config::SupervisorConfig& plan,
+                     const std::string& planned_for, const std::vector<std::string>& model_ids) {
+  const std::string where = path_ + ": set_plan: job '" + job_id + "': ";
   detail::Tx tx(db_.get(), path_);
+  if (!planned_for.empty() && !machine(planned_for)) {
+    throw StoreError(
+        where +
+        detail::unknown_ref("machine", planned_for,
+                            detail::ids(db_.get(), path_, "SELECT id FROM machines ORDER BY id")));
+  }
   Stmt(db_.get(), path_,
-       "UPDATE jobs SET variant = ?, explanation = ?, plan = ?, updated_at_ms = ? "
-       "WHERE id = ? AND state IN (?, ?)")
+       "UPDATE jobs SET variant = ?, explanation = ?, plan = ?, planned_for = ?, "
+       "updated_at_ms = ? WHERE id = ? AND state IN (?, ?)")
       .bind(static_cast<int>(variant), explanation,
-            Blob{detail::serialize(plan, "supervisor configuration")}, detail::now_ms(), job_id,
-            static_cast<int>(smc::config::JOB_QUEUED), static_cast<int>(smc::config::JOB_PLANNED))
+            Blob{detail::serialize(plan, "supervisor configuration")}, or_null(planned_for),
+            detail::now_ms(), job_id, static_cast<int>(smc::config::JOB_QUEUED),
+            static_cast<int>(smc::config::JOB_PLANNED))
       .run();
   if (sqlite3_changes(db_.get()) == 0) {
     const auto j = job(job_id);
-    throw StoreError(path_ + ": set_plan: job '" + job_id + "' " +
-                     (j ? "is " + std::string(state_name(j->state)) +
-                              "; a plan is set only while queued or planned"
-                        : std::string("is unknown")));
+    throw StoreError(where + (j ? "is " + std::string(state_name(j->state)) +
+                                      "; a plan is set only while queued or planned"
+                                : std::string("is unknown")));
+  }
+  Stmt(db_.get(), path_, "DELETE FROM job_plan_models WHERE job_id = ?").bind(job_id).run();
+  for (const auto& id : model_ids) {
+    if (!model(id)) throw StoreError(where + "unknown model '" + id + "'");
+    Stmt(db_.get(), path_, "INSERT OR IGNORE INTO job_plan_models (job_id, model_id) VALUES (?, ?)")
+        .bind(job_id, id)
+        .run();
   }
   tx.commit();
+}
+
+std::vector<std::string> Store::plan_models(const std::string& job_id) {
+  Stmt s(db_.get(), path_,
+         "SELECT model_id FROM job_plan_models WHERE job_id = ? ORDER BY model_id");
+  s.bind(job_id);
+  std::vector<std::string> out;
+  while (s.step()) out.push_back(s.text(0));
+  return out;
+}
+
+JobEvent Store::note_event(const std::string& job_id, const std::string& reason) {
+  detail::Tx tx(db_.get(), path_);
+  const auto current = job(job_id);
+  if (!current) throw StoreError(path_ + ": note_event: unknown job '" + job_id + "'");
+  const std::int64_t now = detail::now_ms();
+  JobEvent e{job_id, 0, now, current->state, current->state, reason, current->machine_id};
+  Stmt next(db_.get(), path_, "SELECT COALESCE(MAX(seq), 0) + 1 FROM job_events WHERE job_id = ?");
+  next.bind(job_id).step();
+  e.seq = next.int64(0);
+  Stmt(db_.get(), path_,
+       "INSERT INTO job_events (job_id, seq, time_ms, from_state, to_state, reason, machine_id) "
+       "VALUES (?, ?, ?, ?, ?, ?, ?)")
+      .bind(job_id, e.seq, now, static_cast<int>(e.from_state), static_cast<int>(e.to_state),
+            reason, or_null(e.machine_id))
+      .run();
+  tx.commit();
+  return e;
 }
 
 void Store::record_result(const std::string& job_id, const smc::config::RunSummary& result) {
@@ -330,7 +373,8 @@ namespace {
 
 const char* const kJobCols =
     "SELECT seq, id, spec, state, COALESCE(machine_id, ''), variant, explanation, attempt, "
-    "created_at_ms, updated_at_ms, CASE WHEN ?1 THEN plan END, CASE WHEN ?1 THEN result END "
+    "created_at_ms, updated_at_ms, CASE WHEN ?1 THEN plan END, CASE WHEN ?1 THEN result END, "
+    "COALESCE(planned_for, '') "
     "FROM jobs ";
 
 Job read_job(const Stmt& s, const std::string& file) {
@@ -351,6 +395,7 @@ Job read_job(const Stmt& s, const std::string& file) {
   if (!s.is_null(11)) {
     detail::deserialize(s.blob(11), j.result.emplace(), file, "jobs '" + j.id + "' result");
   }
+  j.planned_for = s.text(12);
   return j;
 }
 

@@ -115,6 +115,22 @@ CREATE TABLE id_counters (
   last INTEGER NOT NULL
 ) WITHOUT ROWID;
 )sql"},
+    Migration{2, "plans bound to a machine and its models; models marked suspect", R"sql(
+-- planned_for: the machine whose models an SMC I plan used (dispatch sends
+-- the job only there); NULL when the plan suits any machine (SMC II).
+ALTER TABLE jobs ADD COLUMN planned_for TEXT REFERENCES machines (id);
+
+-- The models a job's current plan was made from (replaced by a re-plan).
+CREATE TABLE job_plan_models (
+  job_id   TEXT NOT NULL REFERENCES jobs (id),
+  model_id TEXT NOT NULL REFERENCES process_models (id),
+  PRIMARY KEY (job_id, model_id)
+) WITHOUT ROWID;
+
+-- Non-empty: the model is suspect (e.g. a cut planned from it chattered)
+-- and is not used for SMC I until it is validated again.
+ALTER TABLE process_models ADD COLUMN suspect_reason TEXT NOT NULL DEFAULT '';
+)sql"},
 };
 
 }  // namespace

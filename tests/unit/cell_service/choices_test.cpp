@@ -15,6 +15,8 @@
 #include "smc/cell/store/seed.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/documents/load.hpp"
+#include "smc/machining/model_proto.hpp"
+#include "smc/machining/tds.hpp"
 #include "smc/supervision/parameters.hpp"
 
 namespace cell = smc::cell;
@@ -50,7 +52,8 @@ class CellChoices : public ::testing::Test {
     const auto job = db_->submit_job(spec);
     const auto part = *db_->part(job.spec.part_id());
     const auto tool = *db_->tool(job.spec.tool_id());
-    return {job, part, tool, db_->find_models("mill-1", tool.id, part.material_id, part.id)};
+    return {job, part, tool, db_->find_models("mill-1", tool.id, part.material_id, part.id),
+            *db_->machine("mill-1")};
   }
 
   static inline std::filesystem::path dir_;
@@ -70,7 +73,12 @@ store::ProcessModel model(store::ModelKind kind, bool validated, const std::stri
   m.kind = kind;
   m.validated = validated;
   m.provenance = cfg::PROVENANCE_IDENTIFIED;
+  m.machine_id = "mill-1";
   return m;
+}
+
+store::Machine mill(const std::string& id, double power_w = 745.7) {
+  return store::Machine{id, "a mill", power_w, 36, 3000};
 }
 
 }  // namespace
@@ -79,6 +87,7 @@ store::ProcessModel model(store::ModelKind kind, bool validated, const std::stri
 
 TEST(Selection, NoModelsGiveSmcII) {
   cell::PlanInputs in;
+  in.machine = mill("mill-1");
   in.tool.id = "fm";
   in.part.material_id = "al";
   const auto sel = cell::select_variant(in);
@@ -89,6 +98,7 @@ TEST(Selection, NoModelsGiveSmcII) {
 
 TEST(Selection, AForceModelAloneNamesTheMissingStructuralModel) {
   cell::PlanInputs in;
+  in.machine = mill("mill-1");
   in.models = {model(store::ModelKind::kForceProcess, true, "model-1")};
   const auto sel = cell::select_variant(in);
   EXPECT_EQ(sel.variant, cfg::SMC_II);
@@ -98,6 +108,7 @@ TEST(Selection, AForceModelAloneNamesTheMissingStructuralModel) {
 
 TEST(Selection, BothValidatedGiveSmcIAndUnvalidatedOnesAreListedButNotUsed) {
   cell::PlanInputs in;
+  in.machine = mill("mill-1");
   in.models = {model(store::ModelKind::kForceProcess, false, "model-1"),
                model(store::ModelKind::kForceProcess, true, "model-2"),
                model(store::ModelKind::kMilling, true, "model-3")};
@@ -110,13 +121,112 @@ TEST(Selection, BothValidatedGiveSmcIAndUnvalidatedOnesAreListedButNotUsed) {
     EXPECT_NE(sel.explanation.find(id), std::string::npos) << id << ": " << sel.explanation;
   }
   EXPECT_NE(sel.explanation.find("not validated"), std::string::npos) << sel.explanation;
+  EXPECT_NE(sel.explanation.find("SMC I on mill-1"), std::string::npos) << sel.explanation;
 }
 
 TEST(Selection, AnUnvalidatedStructuralModelDoesNotMakeSmcI) {
   cell::PlanInputs in;
+  in.machine = mill("mill-1");
   in.models = {model(store::ModelKind::kForceProcess, true, "model-1"),
                model(store::ModelKind::kMilling, false, "model-2")};
   EXPECT_EQ(cell::select_variant(in).variant, cfg::SMC_II);
+}
+
+// A model a chattering SMC I cut has made suspect is listed with the reason
+// but not used.
+TEST(Selection, ASuspectModelIsListedWithItsReasonButNotUsed) {
+  cell::PlanInputs in;
+  in.machine = mill("mill-1");
+  in.models = {model(store::ModelKind::kForceProcess, true, "model-1"),
+               model(store::ModelKind::kMilling, true, "model-2")};
+  in.models[1].suspect_reason = "job-7 chattered at 612 Hz";
+  const auto sel = cell::select_variant(in);
+  EXPECT_EQ(sel.variant, cfg::SMC_II);
+  EXPECT_FALSE(sel.milling);
+  EXPECT_NE(sel.explanation.find("suspect: job-7 chattered at 612 Hz"), std::string::npos)
+      << sel.explanation;
+  EXPECT_NE(sel.explanation.find("the structural model model-2 is suspect"), std::string::npos)
+      << sel.explanation;
+}
+
+// Models are per machine: those of another machine never make an SMC I plan
+// for this one.
+TEST(Selection, AnotherMachinesModelsAreNotUsed) {
+  cell::PlanInputs in;
+  in.machine = mill("mill-2");
+  in.models = {model(store::ModelKind::kForceProcess, true, "model-1"),
+               model(store::ModelKind::kMilling, true, "model-2")};  // on mill-1
+  EXPECT_EQ(cell::select_variant(in).variant, cfg::SMC_II);
+}
+
+TEST(Binding, TheJobIsBoundToTheMachineWhoseModelsAllowSmcI) {
+  cell::MachineModels m1{mill("mill-1"), true, {}};
+  cell::MachineModels m2{mill("mill-2"), true, {}};
+  for (auto* m : {&m2.models}) {
+    *m = {model(store::ModelKind::kForceProcess, true, "f2"),
+          model(store::ModelKind::kMilling, true, "s2")};
+    for (auto& x : *m) x.machine_id = "mill-2";
+  }
+  cell::PlanInputs in;
+  const auto sel = cell::bind_and_select(in, {m1, m2});
+  EXPECT_EQ(sel.variant, cfg::SMC_I) << sel.explanation;
+  EXPECT_EQ(in.machine.id, "mill-2");
+  EXPECT_NE(sel.explanation.find("SMC I on mill-2"), std::string::npos) << sel.explanation;
+}
+
+TEST(Binding, AnAvailableMachineIsPreferredAmongThoseWithModels) {
+  auto with_models = [](const std::string& id, bool alive) {
+    cell::MachineModels m{mill(id), alive, {}};
+    m.models = {model(store::ModelKind::kForceProcess, true, "f-" + id),
+                model(store::ModelKind::kMilling, true, "s-" + id)};
+    for (auto& x : m.models) x.machine_id = id;
+    return m;
+  };
+  cell::PlanInputs in;
+  EXPECT_EQ(cell::bind_and_select(in, {with_models("mill-1", false), with_models("mill-2", true)})
+                .variant,
+            cfg::SMC_I);
+  EXPECT_EQ(in.machine.id, "mill-2");
+  // The machine with the models is lost but another is available: the job is not
+  // left waiting for it, it runs as a job-shop job on the one that is.
+  cell::PlanInputs other;
+  cell::MachineModels bare{mill("mill-1"), true, {}};
+  const auto sel = cell::bind_and_select(other, {bare, with_models("mill-2", false)});
+  EXPECT_EQ(sel.variant, cfg::SMC_II);
+  EXPECT_TRUE(other.machine.id.empty());
+  EXPECT_NE(sel.explanation.find("mill-2: has usable models but its edge is lost"),
+            std::string::npos)
+      << sel.explanation;
+  // None available: the first with models gets the plan and waits for it.
+  cell::PlanInputs later;
+  (void)cell::bind_and_select(later, {with_models("mill-1", false), with_models("mill-2", false)});
+  EXPECT_EQ(later.machine.id, "mill-1");
+}
+
+TEST(Binding, WithoutModelsOnAnyMachineTheJobIsSmcIIForAnyMachine) {
+  cell::MachineModels m1{
+      mill("mill-1"), true, {model(store::ModelKind::kForceProcess, true, "f1")}};
+  cell::MachineModels m2{mill("mill-2"), true, {}};
+  cell::PlanInputs in;
+  const auto sel = cell::bind_and_select(in, {m1, m2});
+  EXPECT_EQ(sel.variant, cfg::SMC_II);
+  EXPECT_TRUE(in.machine.id.empty());
+  EXPECT_NE(sel.explanation.find("f1"), std::string::npos) << sel.explanation;
+  EXPECT_NE(sel.explanation.find("on any machine"), std::string::npos) << sel.explanation;
+}
+
+TEST(Binding, AJobThatNamesAMachineWithoutModelsIsSmcIIThere) {
+  cell::MachineModels m1{mill("mill-1"), true, {}};
+  cell::MachineModels m2{mill("mill-2"), true, {}};
+  m2.models = {model(store::ModelKind::kForceProcess, true, "f2"),
+               model(store::ModelKind::kMilling, true, "s2")};
+  for (auto& x : m2.models) x.machine_id = "mill-2";
+  cell::PlanInputs in;
+  in.job.spec.set_machine_id("mill-1");
+  const auto sel = cell::bind_and_select(in, {m1, m2});
+  EXPECT_EQ(sel.variant, cfg::SMC_II);
+  EXPECT_EQ(in.machine.id, "mill-1");
+  EXPECT_NE(sel.explanation.find("SMC II on mill-1"), std::string::npos) << sel.explanation;
 }
 
 // ---- planning
@@ -170,12 +280,71 @@ TEST_F(CellChoices, TransferLinePartIsPlannedAsTwoEqualChatterFreePasses) {
     EXPECT_DOUBLE_EQ(p.spindle_rpm(), 1500);
     EXPECT_DOUBLE_EQ(p.feedrate_mm_s(), 10);
   }
-  EXPECT_EQ(modules_of(plan.config), "ABCIJLM");
-  EXPECT_EQ(plan.config.grafcet_name(), "smc1.grafcet");
+  // Guarded by default: the chatter detector watches the SMC I cut.
+  EXPECT_EQ(modules_of(plan.config), "ABCEFGIJLM");
+  EXPECT_EQ(plan.config.grafcet_name(), "smc1_guarded.grafcet");
+  EXPECT_EQ(plan.machine_id, "mill-1");
+  EXPECT_EQ(plan.model_ids,
+            (std::vector<std::string>{"bracket-tl.mill-1.force", "bracket-tl.mill-1.milling"}));
   EXPECT_TRUE(plan.config.has_force_model());
   EXPECT_NEAR(plan.config.operation().slow_period_s(), 0.04, 1e-12);  // one revolution
   EXPECT_NE(plan.config.explanation().find("2 equal passes of 1 mm"), std::string::npos)
       << plan.config.explanation();
+}
+
+TEST_F(CellChoices, ThePapersSmcIOnRequest) {
+  cfg::SupervisorConfig defaults;
+  smc::documents::load(src("cell/configs/defaults.textproto"), defaults);
+  const cell::Planner paper(src("cell/grafcets"), defaults, {.guard_smc1 = false});
+  const auto in = inputs("bracket-tl");
+  const auto plan = paper.plan(in, cell::select_variant(in));
+  EXPECT_EQ(modules_of(plan.config), "ABCIJLM");
+  EXPECT_EQ(plan.config.grafcet_name(), "smc1.grafcet");
+}
+
+// The stability check covers the feeds the model-based controller commands,
+// not only the programmed one: at the default lower clamp (0.005 mm/tooth)
+// a 1 mm pass chatters (the critical depth falls with the feed), so the plan
+// raises the clamp to the lowest feed at which it is stable.
+TEST_F(CellChoices, TheLowerFeedClampIsRaisedToTheLowestStableFeed) {
+  const auto in = inputs("bracket-tl");
+  const auto plan = planner_->plan(in, cell::select_variant(in));
+  const auto mach = smc::machining::from_proto(plan.config.milling_model(), "m");
+  auto stable = [&](double fpt, double depth) {
+    return smc::machining::assess_stability(mach, {1500, fpt, depth}).verdict ==
+           smc::machining::Verdict::stable;
+  };
+  EXPECT_FALSE(stable(0.005, 1.0)) << "the default clamp would let the controller chatter";
+  const double clamp = plan.config.operation().min_feed_per_tooth_mm();
+  EXPECT_DOUBLE_EQ(clamp, plan.lower_clamp_mm);
+  EXPECT_GT(clamp, 0.005);
+  EXPECT_TRUE(stable(clamp, 1.0));
+  EXPECT_FALSE(stable(0.9 * clamp, 1.0)) << "the clamp is the lowest stable feed (within 2 %)";
+  EXPECT_LE(clamp, 0.8 * plan.equilibrium_feed_mm);
+  // The steady feed (eq. 1 at the power-limited F_ref) keeps the margin.
+  EXPECT_LT(plan.equilibrium_feed_mm, plan.programmed_feed_mm);
+  EXPECT_TRUE(stable(plan.equilibrium_feed_mm, 1.0 / 0.8));
+  EXPECT_NE(plan.config.explanation().find("lower clamp"), std::string::npos)
+      << plan.config.explanation();
+}
+
+// A machine with less spindle power holds a lower F_ref, so L settles at a
+// lower feed where the critical depth is smaller: the plan for that machine
+// has more passes than the programmed feed alone would give.
+TEST_F(CellChoices, ALessPowerfulMachinesLowerFeedNeedsMorePasses) {
+  auto in = inputs("bracket-tl");
+  const auto sel = cell::select_variant(in);
+  in.machine.max_spindle_power_w = 300;
+  const auto plan = planner_->plan(in, sel);
+  EXPECT_GT(plan.config.program().passes_size(), 2) << plan.config.explanation();
+  EXPECT_NE(plan.config.explanation().find("added for the feeds below the programmed one"),
+            std::string::npos)
+      << plan.config.explanation();
+  const double depth = plan.config.program().passes(0).depth_mm();
+  const auto mach = smc::machining::from_proto(plan.config.milling_model(), "m");
+  EXPECT_EQ(
+      smc::machining::assess_stability(mach, {1500, plan.equilibrium_feed_mm, depth / 0.8}).verdict,
+      smc::machining::Verdict::stable);
 }
 
 TEST_F(CellChoices, JobShopPartRunsAsProgrammedUnderSmcII) {

@@ -271,4 +271,49 @@ TEST_F(CellStoreJobs, ADuplicateJsonKeyAndAFolderAreRefusedByName) {
 }
 
 }  // namespace
+// A plan is bound to the machine whose models it used, and records them; a
+// re-plan replaces both. A chattering cut marks those models suspect, with
+// the reason; validating a model again clears it. Notes join the job's
+// history without a state change.
+TEST_F(CellStoreJobs, APlanRecordsItsMachineAndModelsWhichCanBeMarkedSuspect) {
+  Store s = seeded();
+  const Job j = s.submit_job(job_for("bracket-tl"));
+  smc::config::SupervisorConfig plan;
+  plan.set_config_id("p");
+  s.set_plan(j.id, smc::config::SMC_I, "why", plan, "mill-2",
+             {"bracket-tl.mill-2.milling", "bracket-tl.mill-2.force"});
+  EXPECT_EQ(s.job(j.id)->planned_for, "mill-2");
+  EXPECT_THAT(s.plan_models(j.id),
+              ElementsAre("bracket-tl.mill-2.force", "bracket-tl.mill-2.milling"));
+  s.set_plan(j.id, smc::config::SMC_II, "why not", plan);
+  EXPECT_EQ(s.job(j.id)->planned_for, "");
+  EXPECT_TRUE(s.plan_models(j.id).empty());
+  EXPECT_THROW(s.set_plan(j.id, smc::config::SMC_I, "x", plan, "mill-9"), StoreError);
+  EXPECT_THROW(s.set_plan(j.id, smc::config::SMC_I, "x", plan, "mill-1", {"no-such-model"}),
+               StoreError);
+  EXPECT_TRUE(s.plan_models(j.id).empty()) << "a refused plan writes nothing";
+
+  s.mark_model_suspect("bracket-tl.mill-2.milling", "job-1 chattered at 620 Hz on mill-2");
+  EXPECT_EQ(s.model("bracket-tl.mill-2.milling")->suspect_reason,
+            "job-1 chattered at 620 Hz on mill-2");
+  EXPECT_TRUE(s.model("bracket-tl.mill-2.force")->suspect_reason.empty());
+  EXPECT_THROW(s.mark_model_suspect("bracket-tl.mill-2.milling", ""), StoreError);
+  EXPECT_THROW(s.mark_model_suspect("no-such-model", "x"), StoreError);
+  // Among the part's models, the suspect one comes after the trusted ones.
+  const auto found = s.find_models("mill-2", "", "", "bracket-tl");
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_EQ(found.back().id, "bracket-tl.mill-2.milling");
+  s.set_model_validated("bracket-tl.mill-2.milling", true);
+  EXPECT_TRUE(s.model("bracket-tl.mill-2.milling")->suspect_reason.empty());
+
+  const JobEvent note = s.note_event(j.id, "chatter event 3 on mill-2: detected at 620 Hz");
+  EXPECT_TRUE(note.is_note());
+  EXPECT_EQ(note.to_state, JOB_QUEUED);
+  const auto ev = s.events(j.id);
+  ASSERT_EQ(ev.size(), 2u);
+  EXPECT_FALSE(ev[0].is_note());
+  EXPECT_TRUE(ev[1].is_note());
+  EXPECT_EQ(ev[1].reason, "chatter event 3 on mill-2: detected at 620 Hz");
+}
+
 }  // namespace smc::cell::store::test

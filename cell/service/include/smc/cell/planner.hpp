@@ -16,7 +16,19 @@ struct PlanInputs {
   store::Job job;
   store::Part part;
   store::Tool tool;
-  std::vector<store::ProcessModel> models;  // found for the job's machine(s), tool, material, part
+  std::vector<store::ProcessModel> models;  // found for `machine`, the tool, material and part
+  // The machine the plan is for (its models, its limits). An empty id: any
+  // machine (an SMC II plan for a job that names none).
+  store::Machine machine;
+};
+
+// A machine the cell could plan a job for, with the models found for it.
+struct MachineModels {
+  store::Machine machine;
+  // Its edge is seen, or not yet given up (the cell's edge grace): machines
+  // that are available are preferred when several qualify.
+  bool available = true;
+  std::vector<store::ProcessModel> models;
 };
 
 struct Selection {
@@ -26,26 +38,57 @@ struct Selection {
   std::optional<store::ProcessModel> milling;  // validated milling (structural) model (SMC I)
 };
 
-// SMC I when a validated force-process model and a validated milling model
+// SMC I when a validated, unsuspected force-process model and milling model
 // exist for the job's tool and material (and part, when models are part
-// specific); SMC II otherwise. The explanation lists every model considered.
+// specific) on in.machine; SMC II otherwise. The explanation names the
+// machine and lists every model considered (suspect ones with the reason).
 Selection select_variant(const PlanInputs& in);
+
+// Binds the job to a machine and selects its variant: the job's own machine
+// when it names one; else the first available machine (in the given order)
+// whose models allow SMC I (when none is available, the first with such
+// models); else SMC II for any machine, the explanation giving each
+// machine's reason. Fills in.machine and in.models.
+Selection bind_and_select(PlanInputs& in, const std::vector<MachineModels>& machines);
 
 struct Plan {
   smc::config::SupervisorConfig config;  // machine fields left for dispatch
   double critical_depth_mm = -1;  // SMC I: time-domain critical depth at the programmed speed
   double planning_s = 0;
+  std::string machine_id;              // SMC I: the machine whose models it used; else empty
+  std::vector<std::string> model_ids;  // the models it used
+  // SMC I: the feeds the stability check covered (mm/tooth): the programmed
+  // feed, the eq. 1 equilibrium feed at the pass's F_ref, and the lower
+  // clamp the plan gives the controller.
+  double programmed_feed_mm = 0, equilibrium_feed_mm = 0, lower_clamp_mm = 0;
+};
+
+struct PlannerOptions {
+  double margin = 0.8;  // passes no deeper than 80 % of the critical depth
+  // SMC I jobs run smc1_guarded.grafcet (SMC I with the chatter detector as
+  // a safety net); false: the paper's smc1.grafcet, which has none.
+  bool guard_smc1 = true;
+  // The lower clamp on the controller's feed is raised at most to this share
+  // of the steady feed before a pass is added instead.
+  double max_clamp_share = 0.8;
 };
 
 class Planner {
  public:
-  // `grafcet_dir` holds smc1.grafcet and smc2.grafcet; `defaults` the
-  // operation and simulation defaults (cell/configs/defaults.textproto).
-  Planner(const std::string& grafcet_dir, smc::config::SupervisorConfig defaults);
+  // `grafcet_dir` holds smc1.grafcet, smc1_guarded.grafcet and
+  // smc2.grafcet; `defaults` the operation and simulation defaults
+  // (cell/configs/defaults.textproto).
+  Planner(const std::string& grafcet_dir, smc::config::SupervisorConfig defaults,
+          PlannerOptions options = {});
 
-  // SMC I: critical depth by time-domain simulation at the programmed speed
-  // and feed, passes of equal depth no deeper than `margin` x critical,
-  // model-based control. SMC II: one pass at full depth, adaptive control,
+  // SMC I (for in.machine): critical depth by time-domain simulation at the
+  // programmed speed and feed, passes of equal depth no deeper than
+  // `margin` x critical; then each pass is checked at the feeds the
+  // model-based controller may command on that machine: stable with the
+  // margin at the eq. 1 equilibrium feed for its power-limited F_ref, and
+  // stable (no margin) down to the controller's lower feed clamp, which is
+  // raised for that up to max_clamp_share x the steady feed; passes are added
+  // until both hold. SMC II: one pass at full depth, adaptive control,
   // chatter detection and suppression. Throws std::runtime_error naming
   // what is missing.
   Plan plan(const PlanInputs& in, const Selection& sel) const;
@@ -55,11 +98,12 @@ class Planner {
                                                    const store::Machine& machine,
                                                    const std::string& config_id);
 
-  double margin = 0.8;  // passes no deeper than 80 % of the critical depth
+  const PlannerOptions& options() const noexcept { return options_; }
 
  private:
-  std::string smc1_text_, smc2_text_;
+  std::string smc1_text_, smc1_guarded_text_, smc2_text_;
   smc::config::SupervisorConfig defaults_;
+  PlannerOptions options_;
 };
 
 }  // namespace smc::cell

@@ -14,9 +14,15 @@ namespace smc::cell {
 double power_force_ratio(const smc::config::MillingModel& model, double depth_mm,
                          double spindle_rpm, double feed_per_tooth_mm);
 
+// The force reference of one SMC I pass on a machine of this power: target x
+// P_max / safety / (V rho), target being operation.power_target_fraction
+// (0: the edge's default 0.95). Needs the configuration's milling model and
+// operation (cutter radius).
+double force_reference_n(const smc::config::SupervisorConfig& config, double max_spindle_power_w,
+                         double depth_mm, double spindle_rpm, double feed_per_tooth_mm);
+
 // Sets program.passes[i].force_reference_n of an SMC I configuration whose
-// machine is filled in: target x P_max / safety / (V rho), target being
-// operation.power_target_fraction (0: the edge's default 0.95). Leaves other
+// machine is filled in (force_reference_n for each pass). Leaves other
 // variants, and configurations without a milling model, as they are.
 void plan_force_references(smc::config::SupervisorConfig& config);
 

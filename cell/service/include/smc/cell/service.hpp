@@ -21,7 +21,7 @@ namespace smc::cell {
 
 struct ServiceOptions {
   std::string db_path;
-  std::string grafcet_dir;    // smc1.grafcet, smc2.grafcet
+  std::string grafcet_dir;    // smc1.grafcet, smc1_guarded.grafcet, smc2.grafcet
   std::string defaults_file;  // cell/configs/defaults.textproto
   uint32_t domain_id = 0;
   std::string partition;
@@ -30,6 +30,9 @@ struct ServiceOptions {
   std::chrono::milliseconds edge_grace{6000};
   uint32_t max_attempts = 3;  // an interrupted job is re-queued until this many attempts
   bool learn = true;          // fit force-process models from SMC II runs
+  // SMC I jobs run smc1_guarded (chatter detector as a safety net; chatter
+  // marks the plan's models suspect); false: the paper's SMC I.
+  bool guard_smc1 = true;
 };
 
 class CellService {

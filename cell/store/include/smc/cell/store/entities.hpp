@@ -73,6 +73,10 @@ struct ProcessModel {
   smc::config::FitStatistics fit;  // FITTED models: statistics of the fit
   std::string note;                // where it came from, in words
   std::int64_t created_at_ms = 0;
+  // Non-empty: why the model is suspect (a cut planned from it chattered).
+  // A suspect model is listed but not used for SMC I (Store::mark_model_suspect;
+  // set_model_validated(id, true) clears it).
+  std::string suspect_reason;
 };
 
 struct Job {
@@ -82,7 +86,10 @@ struct Job {
   smc::config::JobState state = smc::config::JOB_STATE_UNSPECIFIED;
   std::string machine_id;  // assigned machine; empty before assignment
   smc::config::SmcVariant variant = smc::config::SMC_UNSPECIFIED;
-  std::string explanation;    // why this variant (set_plan)
+  std::string explanation;  // why this variant (set_plan)
+  // The machine whose models the plan used (SMC I): dispatch sends the job
+  // only there. Empty: the plan suits any machine (set_plan).
+  std::string planned_for;
   std::uint32_t attempt = 0;  // times assigned
   std::int64_t created_at_ms = 0;
   std::int64_t updated_at_ms = 0;
@@ -99,6 +106,9 @@ struct JobEvent {
   smc::config::JobState to_state = smc::config::JOB_STATE_UNSPECIFIED;
   std::string reason;
   std::string machine_id;  // the job's machine after the event (may be empty)
+  // A note (Store::note_event): something learnt about the job, e.g. a
+  // chatter event; the state did not change.
+  bool is_note() const noexcept { return from_state == to_state; }
 };
 
 // The job state machine (README.md):

@@ -120,8 +120,12 @@ class Store {
   // References must exist; an existing id is an error.
   std::string add_model(const ProcessModel& m);
   std::optional<ProcessModel> model(const std::string& id);
-  // Marks a model validated (or not) after a validation run.
+  // Marks a model validated (or not) after a validation run; validating a
+  // model clears a suspicion.
   void set_model_validated(const std::string& id, bool validated);
+  // Marks a model suspect, with the reason (evidence against it: a cut
+  // planned from it chattered). A suspect model is not used for SMC I.
+  void mark_model_suspect(const std::string& id, const std::string& reason);
   // Every model for the combination, so the cell can explain its choice.
   // An empty machine_id, tool_id or material_id matches any; a part_id
   // matches models for that part and models for any part (part_id empty in
@@ -150,9 +154,19 @@ class Store {
   std::optional<JobEvent> transition(const std::string& job_id, smc::config::JobState from,
                                      smc::config::JobState to, const std::string& reason,
                                      const std::string& machine_id = {});
-  // Records the plan of a QUEUED or PLANNED job (StoreError otherwise).
+  // Records the plan of a QUEUED or PLANNED job (StoreError otherwise):
+  // `planned_for` is the machine whose models the plan used (empty: any
+  // machine), `model_ids` those models (replacing an earlier plan's).
   void set_plan(const std::string& job_id, smc::config::SmcVariant variant,
-                const std::string& explanation, const smc::config::SupervisorConfig& plan);
+                const std::string& explanation, const smc::config::SupervisorConfig& plan,
+                const std::string& planned_for = {},
+                const std::vector<std::string>& model_ids = {});
+  // The models the job's current plan was made from, in id order.
+  std::vector<std::string> plan_models(const std::string& job_id);
+  // Records an event in the job's history without changing its state (from
+  // and to are its current state): something the cell learnt about the job,
+  // e.g. a chatter event. Returns the event.
+  JobEvent note_event(const std::string& job_id, const std::string& reason);
   // Records what a run achieved (job RUNNING or finished).
   void record_result(const std::string& job_id, const smc::config::RunSummary& result);
   std::vector<Job> jobs(const JobFilter& filter = {});  // in submission order

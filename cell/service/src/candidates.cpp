@@ -1,0 +1,33 @@
+#include "smc/cell/candidates.hpp"
+
+#include <stdexcept>
+
+namespace smc::cell {
+
+std::vector<MachineModels> machine_candidates(
+    store::Store& db, const store::Job& job, const store::Part& part,
+    const std::function<bool(const std::string&)>& available) {
+  std::vector<MachineModels> out;
+  for (auto& m : db.machines()) {
+    if (!job.spec.machine_id().empty() && m.id != job.spec.machine_id()) continue;
+    MachineModels c;
+    c.available = !available || available(m.id);
+    c.models = db.find_models(m.id, job.spec.tool_id(), part.material_id, part.id);
+    c.machine = std::move(m);
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+PlanInputs bind_job(store::Store& db, const store::Job& job, Selection& selection,
+                    const std::function<bool(const std::string&)>& available) {
+  const auto part = db.part(job.spec.part_id());
+  if (!part) throw std::runtime_error("job " + job.id + ": unknown part '" + job.spec.part_id() + "'");
+  const auto tool = db.tool(job.spec.tool_id());
+  if (!tool) throw std::runtime_error("job " + job.id + ": unknown tool '" + job.spec.tool_id() + "'");
+  PlanInputs in{job, *part, *tool, {}, {}};
+  selection = bind_and_select(in, machine_candidates(db, job, *part, available));
+  return in;
+}
+
+}  // namespace smc::cell
