@@ -21,6 +21,10 @@ packages=(
   rt-tests
   # dashboard: Boost.Beast (headers), the page's npm packages, the browser test
   libboost-dev ca-certificates chromium
+  # LinuxCNC 2.9 (uspace): rs274 checks the G-code; the real-CNC drive and
+  # its headless machine (deploy/linuxcnc/). Recommends are not installed
+  # (they pull a realtime kernel, PyQt and OpenCV).
+  linuxcnc-uspace linuxcnc-uspace-dev
   # containerised integration tests (tests/integration/containers)
   podman podman-compose debootstrap runc curl
 )

@@ -22,9 +22,11 @@ std::vector<MachineModels> machine_candidates(
 PlanInputs bind_job(store::Store& db, const store::Job& job, Selection& selection,
                     const std::function<bool(const std::string&)>& available) {
   const auto part = db.part(job.spec.part_id());
-  if (!part) throw std::runtime_error("job " + job.id + ": unknown part '" + job.spec.part_id() + "'");
+  if (!part)
+    throw std::runtime_error("job " + job.id + ": unknown part '" + job.spec.part_id() + "'");
   const auto tool = db.tool(job.spec.tool_id());
-  if (!tool) throw std::runtime_error("job " + job.id + ": unknown tool '" + job.spec.tool_id() + "'");
+  if (!tool)
+    throw std::runtime_error("job " + job.id + ": unknown tool '" + job.spec.tool_id() + "'");
   PlanInputs in{job, *part, *tool, {}, {}};
   selection = bind_and_select(in, machine_candidates(db, job, *part, available));
   return in;

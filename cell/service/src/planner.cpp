@@ -10,6 +10,7 @@
 #include "smc/documents/load.hpp"
 #include "smc/machining/model_proto.hpp"
 #include "smc/machining/tds.hpp"
+#include "smc/supervision/gcode.hpp"
 #include "smc/supervision/parameters.hpp"
 #include "smc/supervision/program.hpp"
 
@@ -328,6 +329,10 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
     p->set_feedrate_mm_s(job.feedrate_mm_s());
     p->set_spindle_rpm(rpm);
   }
+  prog->set_gcode(smc::supervision::render_gcode(
+      c, {.title = "job " + in.job.id + ", part " + in.part.id + ", " +
+                   std::string(store::variant_name(sel.variant)) +
+                   (out.machine_id.empty() ? "" : " for " + out.machine_id)}));
   out.planning_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

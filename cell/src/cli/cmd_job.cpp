@@ -5,6 +5,7 @@
 // unknown job or state.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -57,9 +58,15 @@ void print_job(const store::Job& j, const std::vector<store::JobEvent>& events) 
       std::snprintf(depth, sizeof depth, "%g mm", p.depth_mm());
       passes += (passes.empty() ? "" : ", ") + std::string(depth);
     }
+    const auto& gcode = prog.gcode();
+    const auto gcode_lines = std::count(gcode.begin(), gcode.end(), '\n');
     std::printf("            configuration '%s', %d passes%s%s; for %s\n",
                 j.plan->config_id().c_str(), prog.passes_size(), passes.empty() ? "" : ": ",
                 passes.c_str(), j.planned_for.empty() ? "any machine" : j.planned_for.c_str());
+    if (gcode_lines > 0) {
+      std::printf("            G-code: %ld lines (smc-cell job show %s --gcode)\n",
+                  static_cast<long>(gcode_lines), j.id.c_str());
+    }
   }
   if (j.result) {
     const auto& r = *j.result;
@@ -168,15 +175,26 @@ SMC_CELL_COMMAND(job, 20) {
   struct ShowArgs {
     std::string id;
     std::string db;
+    bool gcode = false;
   };
   auto show_args = std::make_shared<ShowArgs>();
   auto* show = job->add_subcommand(
       "show", "One job: its spec, state, plan (variant and why), result and every event");
   show->add_option("ID", show_args->id, "Job id, e.g. job-000001")->required();
   add_db_option(show, show_args->db);
+  show->add_flag("--gcode", show_args->gcode,
+                 "Print only the plan's G-code program (RS274NGC), e.g. to save it as a .ngc file");
   show->callback([show_args] {
     store::Store s = store::Store::open(show_args->db, store::OpenMode::kExisting);
     const store::Job j = known_job(s, show_args->id);
+    if (show_args->gcode) {
+      if (!j.plan || j.plan->program().gcode().empty()) {
+        throw Failure(1, j.id + " has no G-code yet: it is rendered when the job is planned (" +
+                             std::string(store::state_name(j.state)) + " now)");
+      }
+      std::fputs(j.plan->program().gcode().c_str(), stdout);
+      return;
+    }
     print_job(j, s.events(j.id));
   });
 
