@@ -349,6 +349,13 @@ smc::config::SupervisorConfig Planner::for_machine(const smc::config::Supervisor
   m->set_max_spindle_rpm(machine.max_spindle_rpm);
   // SMC I: each pass's F_ref from the models, for this machine's power.
   plan_force_references(c);
+  // The G-code for this machine: F capped by its max feedrate.
+  if (!c.program().gcode().empty()) {
+    c.mutable_program()->set_gcode(smc::supervision::render_gcode(
+        c,
+        {.title = "configuration " + config_id + " for " + machine.id + ", part " +
+                  c.program().part_id() + ", " + std::string(store::variant_name(c.variant()))}));
+  }
   return c;
 }
 

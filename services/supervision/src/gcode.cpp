@@ -1,5 +1,6 @@
 #include "smc/supervision/gcode.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -47,6 +48,8 @@ std::string render_gcode(const FixedProgram& p, const CutGeometry& g, const Gcod
   require(positive(g.part_length_mm), "workpiece.length_mm", "must be > 0");
   require(std::isfinite(g.approach_mm) && g.approach_mm >= 0, "approach_mm", "must be >= 0");
   require(positive(g.max_feed_per_tooth_mm), "operation.max_feed_per_tooth_mm", "must be > 0");
+  require(std::isfinite(g.max_feedrate_mm_s) && g.max_feedrate_mm_s >= 0,
+          "machine.max_feedrate_mm_s", "must be >= 0 (0: not known)");
   require(positive(o.safe_z_mm) && positive(o.clearance_mm), "options",
           "safe Z and clearance must be > 0");
   for (int i = o.first_pass; i < p.count; ++i) {
@@ -63,12 +66,13 @@ std::string render_gcode(const FixedProgram& p, const CutGeometry& g, const Gcod
   auto line = [&out](const std::string& l) { out += l + "\n"; };
   if (!o.title.empty()) line("(" + comment_text(o.title) + ")");
   line("(face milling, " + std::to_string(p.count - o.first_pass) + " of " +
-       std::to_string(p.count) + " passes, program revision " + std::to_string(p.revision) +
-       ", " + num(p.total_depth_mm() - p.depth_before(o.first_pass)) + " mm to remove)");
+       std::to_string(p.count) + " passes, program revision " + std::to_string(p.revision) + ", " +
+       num(p.total_depth_mm() - p.depth_before(o.first_pass)) + " mm to remove)");
   line("(frame: X0 part leading edge, part to X" + num(g.part_length_mm) +
        "; Y0 cutter axis; Z0 top face before pass 1)");
-  line("(F is the highest feed the supervisor may command; it scales F down with the adaptive "
-       "feed)");
+  line(
+      "(F is the highest feed the supervisor may command; it scales F down with the adaptive "
+      "feed)");
   line("G21 G17 G90 G94 G54 G49 G40 G80 G64 P0.01");
   line("M52 P1 (adaptive feed on)");
   line("M53 P1 (feed-hold input on)");
@@ -77,10 +81,11 @@ std::string render_gcode(const FixedProgram& p, const CutGeometry& g, const Gcod
   for (int i = o.first_pass; i < p.count; ++i) {
     const auto& s = p.passes[static_cast<size_t>(i)];
     const double z = -p.depth_before(i + 1);
-    const double f_max = g.max_feed_per_tooth_mm * g.teeth * s.spindle_rpm;  // mm/min
+    double f_max = g.max_feed_per_tooth_mm * g.teeth * s.spindle_rpm;  // mm/min
+    if (g.max_feedrate_mm_s > 0) f_max = std::min(f_max, g.max_feedrate_mm_s * 60);
     line("(pass " + std::to_string(i + 1) + " of " + std::to_string(p.count) + ": " +
-         num(s.depth_mm) + " mm deep to Z" + num(z) + ", programmed " +
-         num(s.feedrate_mm_s * 60) + " mm/min, " + num(s.spindle_rpm) + " rpm)");
+         num(s.depth_mm) + " mm deep to Z" + num(z) + ", programmed " + num(s.feedrate_mm_s * 60) +
+         " mm/min, " + num(s.spindle_rpm) + " rpm)");
     if (s.spindle_rpm != rpm) {
       line("S" + num(s.spindle_rpm) + " M3");
       rpm = s.spindle_rpm;
@@ -105,8 +110,7 @@ std::string render_gcode(const smc::config::SupervisorConfig& c, const GcodeOpti
                                 std::to_string(FixedProgram::kMaxPasses));
   }
   for (const auto& s : passes) {
-    p.passes[p.count++] = {s.depth_mm(), s.feedrate_mm_s(), s.spindle_rpm(),
-                           s.force_reference_n()};
+    p.passes[p.count++] = {s.depth_mm(), s.feedrate_mm_s(), s.spindle_rpm(), s.force_reference_n()};
   }
   p.revision = c.program().revision();
   CutGeometry g;
@@ -119,6 +123,7 @@ std::string render_gcode(const smc::config::SupervisorConfig& c, const GcodeOpti
                   : c.program().approach_mm() > 0  ? c.program().approach_mm()
                                                    : 5.0;
   g.max_feed_per_tooth_mm = c.operation().max_feed_per_tooth_mm();
+  g.max_feedrate_mm_s = c.machine().max_feedrate_mm_s();
   return render_gcode(p, g, o);
 }
 

@@ -254,6 +254,11 @@ TEST_F(CellChoices, TheSmcIPlanSetsEachPassesForceReferenceForTheMachinesPower) 
     EXPECT_NEAR(p.force_reference_n(), 0.95 * 745.7 / (v * rho), 1e-9);
     EXPECT_LT(p.force_reference_n(), 0.9 * papers);
   }
+  // The G-code travels with the plan, rendered again for the machine: F is
+  // capped by its max feedrate (36 mm/s = 2160 mm/min), not 0.6 x 4 x 1500.
+  EXPECT_NE(plan.config.program().gcode().find("F3600"), std::string::npos);
+  EXPECT_NE(c.program().gcode().find("F2160"), std::string::npos) << c.program().gcode();
+  EXPECT_NE(c.program().gcode().find("configuration c-1 for mill-x"), std::string::npos);
   // Half the power, half the force.
   machine.max_spindle_power_w = 745.7 / 2;
   const auto half = cell::Planner::for_machine(plan.config, machine, "c-2");

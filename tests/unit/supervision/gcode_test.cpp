@@ -2,6 +2,8 @@
 // LinuxCNC's own interpreter (rs274 -g prints the canonical machining calls
 // a program makes, with no LinuxCNC running).
 
+#include "smc/supervision/gcode.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -16,7 +18,6 @@
 #include <vector>
 
 #include "smc/documents/load.hpp"
-#include "smc/supervision/gcode.hpp"
 #include "smc_config.pb.h"
 
 namespace sv = smc::supervision;
@@ -33,7 +34,8 @@ struct Canon {
 // Runs rs274 -g on the program; its canonical calls in order. rs274 comes
 // with LinuxCNC (deploy/setup.sh installs linuxcnc-uspace).
 std::vector<Canon> interpret(const std::string& program, std::string* error = nullptr) {
-  const auto dir = std::filesystem::temp_directory_path() / ("smc-gcode-" + std::to_string(getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("smc-gcode-" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   const auto file = dir / "p.ngc";
   std::ofstream(file) << program;
@@ -155,6 +157,18 @@ TEST(Gcode, ThePlannedConfigurationRendersAsItsProgram) {
   EXPECT_EQ(feeds, c.program().passes_size());
 }
 
+// F never exceeds what the machine can feed: LinuxCNC would cap it at the
+// axis velocity before scaling it, and the edge's scale would be wrong.
+TEST(Gcode, TheMachinesMaxFeedrateCapsF) {
+  auto g = paper_geometry();
+  g.max_feedrate_mm_s = 36;
+  double f = 0;
+  for (const auto& c : interpret(sv::render_gcode(paper_program(1), g))) {
+    if (c.call == "SET_FEED_RATE" && !c.args.empty() && c.args[0] > 0) f = c.args[0];
+  }
+  EXPECT_DOUBLE_EQ(f, 36 * 60);
+}
+
 TEST(Gcode, ImpossibleProgramsAreRefusedNamingTheField) {
   auto expect_refused = [](const sv::FixedProgram& p, const sv::CutGeometry& g,
                            const sv::GcodeOptions& o, const std::string& field) {
@@ -175,7 +189,8 @@ TEST(Gcode, ImpossibleProgramsAreRefusedNamingTheField) {
   expect_refused(paper_program(2), {4, 0, 150, 5, 0.6}, {}, "cutter.radius_mm");
   expect_refused(paper_program(2), paper_geometry(), {.first_pass = 2}, "first_pass");
   // A title cannot close the comment and inject a block.
-  const auto text = sv::render_gcode(paper_program(1), paper_geometry(), {.title = "a) G0 Z-50 (b"});
+  const auto text =
+      sv::render_gcode(paper_program(1), paper_geometry(), {.title = "a) G0 Z-50 (b"});
   EXPECT_EQ(text.find("G0 Z-50 ("), std::string::npos);
   for (const auto& c : interpret(text)) {
     if (c.call == "STRAIGHT_TRAVERSE") {

@@ -16,7 +16,10 @@
 //
 // F: LinuxCNC's motion.adaptive-feed is clamped to [0, 1], so the edge can
 // only slow the programmed feed: F is the highest feed the edge may command
-// for the pass (max feed per tooth x teeth x rev/min). The programmed
+// for the pass (max feed per tooth x teeth x rev/min, capped by the
+// machine's max feedrate when known). LinuxCNC caps F at the axes' maximum
+// velocity and then scales it by the adaptive feed, so a drive turns a feed
+// command into the scale against min(F, axis max velocity). The programmed
 // feedrate the supervisor starts from is in each pass's comment.
 
 #include <string>
@@ -35,13 +38,14 @@ struct CutGeometry {
   double part_length_mm = 0;
   double approach_mm = 5;            // air before the cutter edge meets the part
   double max_feed_per_tooth_mm = 0;  // the edge's upper clamp: sets F
+  double max_feedrate_mm_s = 0;      // the machine's; caps F (0: not known)
 };
 
 struct GcodeOptions {
-  std::string title;       // first comment line (job, part, configuration)
-  int first_pass = 0;      // render passes [first_pass, count): a rewrite's remainder
-  double safe_z_mm = 10;   // above the part's top face
-  double clearance_mm = 2; // past the part's far edge before retracting
+  std::string title;        // first comment line (job, part, configuration)
+  int first_pass = 0;       // render passes [first_pass, count): a rewrite's remainder
+  double safe_z_mm = 10;    // above the part's top face
+  double clearance_mm = 2;  // past the part's far edge before retracting
 };
 
 // Throws std::invalid_argument naming the field when the program or the

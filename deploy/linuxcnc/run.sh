@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# The headless LinuxCNC mill of this folder (smc-mill.ini).
+#
+#   deploy/linuxcnc/run.sh start [--dir DIR]   start it; return once it is ready
+#                                               (out of E-stop, on, homed)
+#   deploy/linuxcnc/run.sh stop [--dir DIR]    stop it (the display exits, LinuxCNC
+#                                               shuts down)
+#   deploy/linuxcnc/run.sh exec CMD [ARGS]     run CMD as the mill's user, e.g.
+#                                               exec deploy/linuxcnc/smc-cnc run p.ngc
+#   deploy/linuxcnc/run.sh foreground [--dir DIR]
+#
+# LinuxCNC's rtapi_app refuses to run as root, so as root the mill runs as the
+# user smc-cnc (created when missing; SMC_CNC_USER to change), and so must
+# every program that talks to it (exec). Its configuration is copied to DIR
+# (default /tmp/smc-linuxcnc), which that user owns: LinuxCNC writes its
+# parameter and position files there. Log: DIR/linuxcnc.log. One LinuxCNC per
+# host (fixed System V keys).
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+user=${SMC_CNC_USER:-smc-cnc}
+dir=/tmp/smc-linuxcnc
+action=${1:-}
+[[ $# -gt 0 ]] && shift
+case "$action" in
+  -h|--help|"") sed -n '2,18p' "$0"; [[ -n $action ]]; exit $? ;;
+esac
+
+as=()
+home=$HOME
+if [[ $(id -u) -eq 0 ]]; then
+  id "$user" >/dev/null 2>&1 || useradd --system --create-home --shell /usr/sbin/nologin "$user"
+  as=(runuser -u "$user" --)
+  home=$(getent passwd "$user" | cut -d: -f6)
+fi
+# A minimal environment: LinuxCNC's Python modules are for /usr/bin/python3,
+# and its tool table shared memory is found through HOME.
+env_of=(env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME="$home")
+
+if [[ $action == exec ]]; then
+  exec "${as[@]}" "${env_of[@]}" "$@"
+fi
+
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --dir) dir=$2; shift 2 ;;
+    *) echo "run.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+
+case "$action" in
+  stop)
+    [[ -d $dir ]] && touch "$dir/stop"
+    for _ in $(seq 1 200); do
+      pgrep -x milltask >/dev/null || pgrep -x rtapi_app >/dev/null || exit 0
+      sleep 0.1
+    done
+    echo "run.sh: LinuxCNC did not stop within 20 s (see $dir/linuxcnc.log)" >&2
+    exit 1 ;;
+  start|foreground) ;;
+  *) echo "run.sh: unknown command '$action' (see --help)" >&2; exit 2 ;;
+esac
+
+command -v linuxcnc >/dev/null || { echo "run.sh: LinuxCNC is not installed: run deploy/setup.sh" >&2; exit 1; }
+if pgrep -x milltask >/dev/null; then
+  echo "run.sh: a LinuxCNC is already running on this host (one per host): stop it first" >&2
+  exit 1
+fi
+rm -rf "$dir"
+mkdir -p "$dir"
+cp "$here"/smc-mill.ini "$here"/smc-mill.hal "$here"/smc-mill.tbl "$here"/smc-display "$dir"/
+[[ ${#as[@]} -eq 0 ]] || chown -R "$user" "$dir"
+launch=("${as[@]}" "${env_of[@]}" SMC_CNC_READY="$dir/ready" SMC_CNC_STOP="$dir/stop"
+  linuxcnc -r "$dir/smc-mill.ini")
+cd "$dir"
+if [[ $action == foreground ]]; then
+  exec "${launch[@]}"
+fi
+setsid "${launch[@]}" >"$dir/linuxcnc.log" 2>&1 </dev/null &
+pid=$!
+for _ in $(seq 1 300); do
+  if [[ -f $dir/ready ]]; then
+    echo "run.sh: LinuxCNC ready (config and log in $dir; stop: $0 stop --dir $dir)"
+    exit 0
+  fi
+  if ! kill -0 "$pid" 2>/dev/null; then
+    echo "run.sh: LinuxCNC exited before it was ready ($dir/linuxcnc.log):" >&2
+    tail -20 "$dir/linuxcnc.log" >&2
+    exit 1
+  fi
+  sleep 0.1
+done
+echo "run.sh: LinuxCNC not ready within 30 s (see $dir/linuxcnc.log)" >&2
+exit 1

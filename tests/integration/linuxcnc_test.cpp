@@ -1,0 +1,131 @@
+// LinuxCNC 2.9, headless on the shipped machine of deploy/linuxcnc/, runs
+// the G-code the cell renders (services/supervision gcode.hpp). What
+// happened is read from LinuxCNC's own status (deploy/linuxcnc/smc-cnc),
+// not from the project's view of it. One LinuxCNC per host: the tests hold
+// the "linuxcnc" resource lock and start and stop their own.
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "smc/supervision/gcode.hpp"
+
+namespace sv = smc::supervision;
+
+namespace {
+
+std::string src(const std::string& rel) { return std::string(SMC_SOURCE_DIR) + "/" + rel; }
+
+// Runs a shell command; its stdout, and its exit status in *status.
+std::string capture(const std::string& cmd, int* status) {
+  std::FILE* p = ::popen(cmd.c_str(), "r");
+  std::string out;
+  if (p == nullptr) return out;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p) != nullptr) out += buf;
+  const int st = ::pclose(p);
+  *status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  return out;
+}
+
+std::vector<double> numbers_after(const std::string& json, const std::string& key) {
+  std::vector<double> out;
+  const std::regex re("\"" + key + R"(\":\s*(-?[0-9.]+))");
+  for (auto it = std::sregex_iterator(json.begin(), json.end(), re); it != std::sregex_iterator();
+       ++it) {
+    out.push_back(std::stod((*it)[1]));
+  }
+  return out;
+}
+
+class LinuxCnc : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() / ("smc-lcnc-" + std::to_string(getpid()));
+    std::filesystem::create_directories(dir_);
+    // The mill runs as an unprivileged user: it must read the programs.
+    ::chmod(dir_.c_str(), 0755);
+    int st = -1;
+    const std::string out =
+        capture(src("deploy/linuxcnc/run.sh") + " start --dir " + (dir_ / "cnc").string(), &st);
+    ASSERT_EQ(st, 0) << out;
+    started_ = true;
+  }
+  void TearDown() override {
+    if (started_) {
+      int st = -1;
+      const std::string out =
+          capture(src("deploy/linuxcnc/run.sh") + " stop --dir " + (dir_ / "cnc").string(), &st);
+      EXPECT_EQ(st, 0) << out;
+    }
+    std::filesystem::remove_all(dir_);
+  }
+
+  std::string write(const std::string& name, const std::string& text) {
+    const auto f = dir_ / name;
+    std::ofstream(f) << text;
+    ::chmod(f.c_str(), 0644);
+    return f.string();
+  }
+  // smc-cnc run FILE [ARGS], as the mill's user.
+  std::string run_program(const std::string& file, const std::string& args, int* status) {
+    return capture(src("deploy/linuxcnc/run.sh") + " exec " + src("deploy/linuxcnc/smc-cnc") +
+                       " run " + file + " " + args,
+                   status);
+  }
+
+  std::filesystem::path dir_;
+  bool started_ = false;
+};
+
+}  // namespace
+
+// Two 1 mm passes over a 20 mm part, F capped at the mill's 36 mm/s, the
+// adaptive feed at 0.5: every cutting move runs at 18 mm/s by LinuxCNC's own
+// velocity, and the program ends retracted with the spindle off.
+TEST_F(LinuxCnc, RunsTheCellsProgramAtTheAdaptiveFeed) {
+  sv::FixedProgram p;
+  p.passes[p.count++] = {1, 10, 1500, 0};
+  p.passes[p.count++] = {1, 10, 1500, 0};
+  const sv::CutGeometry g{4, 25, 20, 5, 0.6, 36};
+  const std::string file = write("part.ngc", sv::render_gcode(p, g, {.title = "paper part, short"}));
+  int st = -1;
+  const std::string json = run_program(file, "--adaptive-feed 0.5", &st);
+  ASSERT_EQ(st, 0) << json;
+  EXPECT_NE(json.find("\"errors\": []"), std::string::npos) << json;
+  const auto v = numbers_after(json, "max_velocity_mm_s");
+  ASSERT_EQ(v.size(), 2u) << json;
+  for (double x : v) EXPECT_NEAR(x, 0.5 * 36, 0.01 * 18) << json;
+  const std::regex final_pos(R"("final_position": \[([-0-9.]+), ([-0-9.]+), ([-0-9.]+)\])");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(json, m, final_pos)) << json;
+  EXPECT_NEAR(std::stod(m[1]), 20 + 25 + 2, 1e-3);
+  EXPECT_NEAR(std::stod(m[3]), 10, 1e-3);
+  EXPECT_NE(json.find("\"spindle_on\": false"), std::string::npos) << json;
+  // Two cuts of 77 mm at 18 mm/s at least.
+  const auto d = numbers_after(json, "duration_s");
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_GT(d[0], 2 * 77 / 18.0);
+}
+
+// A program LinuxCNC cannot run is reported with LinuxCNC's own message, and
+// the machine stays where it was.
+TEST_F(LinuxCnc, AProgramThatFailsIsReportedWithLinuxCncsMessage) {
+  const std::string file = write("bad.ngc", "G21 G90\nG1 X10 Y0 Z0 F\nM2\n");
+  int st = -1;
+  const std::string json = run_program(file, "", &st);
+  EXPECT_EQ(st, 1) << json;
+  EXPECT_EQ(json.find("\"errors\": []"), std::string::npos) << json;
+  const std::regex final_pos(R"("final_position": \[([-0-9.]+), ([-0-9.]+), ([-0-9.]+)\])");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(json, m, final_pos)) << json;
+  EXPECT_NEAR(std::stod(m[1]), 0, 1e-3) << "no motion";
+}
