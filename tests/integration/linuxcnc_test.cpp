@@ -96,7 +96,8 @@ TEST_F(LinuxCnc, RunsTheCellsProgramAtTheAdaptiveFeed) {
   p.passes[p.count++] = {1, 10, 1500, 0};
   p.passes[p.count++] = {1, 10, 1500, 0};
   const sv::CutGeometry g{4, 25, 20, 5, 0.6, 36};
-  const std::string file = write("part.ngc", sv::render_gcode(p, g, {.title = "paper part, short"}));
+  const std::string file =
+      write("part.ngc", sv::render_gcode(p, g, {.title = "paper part, short"}));
   int st = -1;
   const std::string json = run_program(file, "--adaptive-feed 0.5", &st);
   ASSERT_EQ(st, 0) << json;

@@ -1,6 +1,7 @@
 // smc-edge simulate / check: offline runs of the edge on the simulated mill.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include "smc/edge/replay_drive.hpp"
 #include "smc/edge/runner.hpp"
 #include "smc/edge/sim_mill.hpp"
+#include "smc/machining/model.hpp"
 #include "smc_config.pb.h"
 
 namespace smc::edge::cli {
@@ -27,6 +29,7 @@ struct SimulateArgs {
   double max_time_s = 600;
   double feed_lag_ms = -1;  // < 0: as the configuration says
   double plant_gain = 1;
+  double runout_um = 0;
   bool quiet = false;
 };
 
@@ -118,6 +121,11 @@ void add_simulate(CLI::App& app) {
                   "model: L's force model and the plan stay as configured)")
       ->check(CLI::Range(0.05, 20.0))
       ->capture_default_str();
+  sub->add_option("--runout-um", args->runout_um,
+                  "Cutter runout of the simulated mill: the cutter mounted off-axis by this many\n"
+                  "micrometres (tooth 0 furthest out), the teeth cutting unequal chips; 0: none")
+      ->check(CLI::Range(0.0, smc::machining::kMaxRunoutUm))
+      ->capture_default_str();
   sub->add_flag("--quiet", args->quiet, "Print nothing but errors");
   sub->callback([args] {
     smc::config::SupervisorConfig raw;
@@ -135,6 +143,14 @@ void add_simulate(CLI::App& app) {
       use_plant_model(*raw.mutable_milling_model(), std::move(plant));
     }
     if (args->plant_gain != 1) scale_cutting_law(*raw.mutable_milling_model(), args->plant_gain);
+    if (args->runout_um > 0) {
+      auto* cutter = raw.mutable_milling_model()->mutable_cutter();
+      cutter->clear_radial_runout_um();
+      for (const double r : smc::machining::eccentric_runout_um(
+               static_cast<int>(std::max<std::uint32_t>(cutter->teeth(), 1)), args->runout_um)) {
+        cutter->add_radial_runout_um(r);
+      }
+    }
     RunOptions opts;
     opts.max_time_s = args->max_time_s;
     for (const auto& spec : args->feed_holds) {

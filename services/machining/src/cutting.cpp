@@ -104,12 +104,21 @@ CutForces static_forces(const MillingModel& model, const CutConditions& cut,
   const int n = model.cutter.teeth;
   const double s = rotation_sense(model.workpiece);
   const double v_m_min = cutting_speed_m_per_min(model.cutter.radius_mm, cut.spindle_rpm);
+  // Runout in mm, when every tooth has a value (validated models do; at most
+  // 1000 teeth, model_proto.cpp).
+  double runout_mm[1000];
+  const bool runout = has_runout(model.cutter) &&
+                      static_cast<int>(model.cutter.radial_runout_um.size()) == n && n <= 1000;
+  for (int i = 0; runout && i < n; ++i) {
+    runout_mm[i] = 1e-3 * model.cutter.radial_runout_um[static_cast<size_t>(i)];
+  }
   for (int i = 0; i < n; ++i) {
     const double theta = spindle_angle_rad + 2.0 * kPi * i / n;
     if (!in_cut(e, theta)) continue;
     const double c = std::cos(theta);
     const double sn = std::sin(theta);
-    const double chip = cut.feed_per_tooth_mm * c;
+    const double chip = runout ? runout_chip_mm(runout_mm, n, i, cut.feed_per_tooth_mm, c)
+                               : cut.feed_per_tooth_mm * c;
     const ToothLoad load =
         tooth_load(model.law, model.cutter.lead_angle_deg, chip, cut.depth_mm, v_m_min);
     if (load.tangential_n <= 0 && load.radial_n <= 0) continue;
@@ -127,7 +136,9 @@ CutForces mean_static_forces(const MillingModel& model, const CutConditions& cut
                              int samples) noexcept {
   CutForces mean;
   samples = std::max(samples, 1);
-  const double pitch = 2.0 * kPi / std::max(model.cutter.teeth, 1);
+  // One tooth pitch repeats the cut; with runout, only a revolution does.
+  const double pitch =
+      has_runout(model.cutter) ? 2.0 * kPi : 2.0 * kPi / std::max(model.cutter.teeth, 1);
   double teeth = 0;
   for (int j = 0; j < samples; ++j) {
     const CutForces f = static_forces(model, cut, pitch * (j + 0.5) / samples);

@@ -9,7 +9,8 @@
 //      interpolation between stored steps) and store the new one,
 //   3. every tooth whose tip is over material cuts the chip
 //        h_i = f_t cos(theta_i) + (u_mid - u_delayed) . (cos theta_i, sin theta_i)
-//      clipped at zero, with its angle at the step's middle,
+//      clipped at zero, with its angle at the step's middle (with runout,
+//      f_t cos(theta_i) is runout_chip_mm: model.hpp),
 //   4. the force sum is held over the step and the modes advance exactly.
 //
 // Evaluating the force at the middle of the step makes the scheme second
@@ -52,6 +53,8 @@ class CutEngine {
         teeth_(model.cutter.teeth),
         offset_cos_(static_cast<std::size_t>(model.cutter.teeth)),
         offset_sin_(static_cast<std::size_t>(model.cutter.teeth)),
+        runout_mm_(static_cast<std::size_t>(model.cutter.teeth), 0.0),
+        has_runout_(has_runout(model.cutter)),
         sense_(rotation_sense(model.workpiece)),
         sense_d_(sense_),
         law_(model.law),
@@ -65,7 +68,15 @@ class CutEngine {
       offset_cos_[static_cast<std::size_t>(i)] = std::cos(a);
       offset_sin_[static_cast<std::size_t>(i)] = std::sin(a);
     }
+    if (has_runout_) {
+      for (int i = 0; i < teeth_; ++i) {
+        runout_mm_[static_cast<std::size_t>(i)] =
+            1e-3 * model.cutter.radial_runout_um[static_cast<std::size_t>(i)];
+      }
+    }
   }
+
+  bool runout() const noexcept { return has_runout_; }
 
   StructureModel& structure() noexcept { return structure_; }
   const StructureModel& structure() const noexcept { return structure_; }
@@ -149,7 +160,9 @@ class CutEngine {
         if (xt < 0 || xt > length_mm_) continue;
       }
       const double nominal = feed_mm_ * c;
-      const double chip = nominal + dux * c + duy * s;
+      const double chip =
+          (has_runout_ ? runout_chip_mm(runout_mm_.data(), teeth_, i, feed_mm_, c) : nominal) +
+          dux * c + duy * s;
       if (chip <= 0) {
         if (nominal >= half_feed_mm_ && feed_mm_ > 0) f.jumped_out = true;
         continue;
@@ -270,6 +283,8 @@ class CutEngine {
   double radius_mm_, length_mm_, band_lo_mm_, band_hi_mm_;
   int teeth_;
   std::vector<double> offset_cos_, offset_sin_;  // tooth i's angle from tooth 0's
+  std::vector<double> runout_mm_;                // tooth i's radial runout (mm)
+  bool has_runout_ = false;
   int sense_;
   double sense_d_;
   CuttingLaw law_;

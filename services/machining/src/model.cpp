@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 #include "format.hpp"
@@ -20,6 +21,26 @@ double tooth_period_s(double spindle_rpm, int teeth) noexcept {
 double delay_s(const MillingModel& model, double spindle_rpm) noexcept {
   return model.delay == DelayKind::tooth_period ? tooth_period_s(spindle_rpm, model.cutter.teeth)
                                                 : 60.0 / spindle_rpm;
+}
+
+bool has_runout(const Cutter& cutter) noexcept {
+  for (const double r : cutter.radial_runout_um) {
+    if (r != 0) return true;
+  }
+  return false;
+}
+
+std::vector<double> eccentric_runout_um(int teeth, double amplitude_um, double phase_deg) {
+  if (teeth < 1) throw std::invalid_argument("eccentric_runout_um: teeth must be >= 1");
+  if (!std::isfinite(amplitude_um) || !std::isfinite(phase_deg)) {
+    throw std::invalid_argument("eccentric_runout_um: amplitude and phase must be finite");
+  }
+  std::vector<double> r(static_cast<size_t>(teeth));
+  const double phase = phase_deg * std::numbers::pi / 180.0;
+  for (int i = 0; i < teeth; ++i) {
+    r[static_cast<size_t>(i)] = amplitude_um * std::cos(2 * std::numbers::pi * i / teeth - phase);
+  }
+  return r;
 }
 
 namespace {
@@ -86,6 +107,18 @@ std::vector<std::string> validation_errors(const MillingModel& m, const std::str
   if (!(std::isfinite(m.cutter.lead_angle_deg) && m.cutter.lead_angle_deg >= 0 &&
         m.cutter.lead_angle_deg < 90)) {
     c.fail(cp + ".lead_angle_deg", "must be in [0, 90)", m.cutter.lead_angle_deg);
+  }
+  const auto& runout = m.cutter.radial_runout_um;
+  if (!runout.empty() && static_cast<int>(runout.size()) != m.cutter.teeth) {
+    c.fail(cp + ".radial_runout_um", "needs one value per tooth (" +
+                                         std::to_string(m.cutter.teeth) + "), or none; got " +
+                                         std::to_string(runout.size()));
+  }
+  for (size_t i = 0; i < runout.size(); ++i) {
+    if (!(std::isfinite(runout[i]) && std::fabs(runout[i]) <= kMaxRunoutUm)) {
+      c.fail(cp + ".radial_runout_um[" + std::to_string(i) + "]",
+             "must be within +-" + detail::fmt(kMaxRunoutUm) + " um", runout[i]);
+    }
   }
   const std::string wp = prefix + ".workpiece";
   c.positive(wp + ".width_mm", m.workpiece.width_mm);

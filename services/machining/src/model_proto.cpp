@@ -149,6 +149,8 @@ MillingModel from_proto(const pb::MillingModel& msg, const std::string& prefix) 
   m.cutter.teeth = static_cast<int>(std::min<std::uint32_t>(teeth, 1000));
   m.cutter.radius_mm = msg.cutter().radius_mm();
   m.cutter.lead_angle_deg = msg.cutter().lead_angle_deg();
+  m.cutter.radial_runout_um.assign(msg.cutter().radial_runout_um().begin(),
+                                   msg.cutter().radial_runout_um().end());
   m.workpiece.width_mm = msg.workpiece().width_mm();
   m.workpiece.offset_mm = msg.workpiece().offset_mm();
   m.workpiece.length_mm = msg.workpiece().length_mm();
@@ -204,6 +206,7 @@ pb::MillingModel to_proto(const MillingModel& m) {
   msg.mutable_cutter()->set_teeth(static_cast<std::uint32_t>(std::max(m.cutter.teeth, 0)));
   msg.mutable_cutter()->set_radius_mm(m.cutter.radius_mm);
   msg.mutable_cutter()->set_lead_angle_deg(m.cutter.lead_angle_deg);
+  for (const double r : m.cutter.radial_runout_um) msg.mutable_cutter()->add_radial_runout_um(r);
   msg.mutable_workpiece()->set_width_mm(m.workpiece.width_mm);
   msg.mutable_workpiece()->set_offset_mm(m.workpiece.offset_mm);
   msg.mutable_workpiece()->set_length_mm(m.workpiece.length_mm);

@@ -92,14 +92,14 @@ double log_slope(const std::vector<double>& d, std::size_t first, std::size_t la
 
 // Rest start: the verdict from D_k (see tds.hpp).
 StabilityReport judge_from_rest(const std::vector<double>& d, const std::vector<char>& jumped,
-                                bool settled) {
+                                bool settled, const std::string& period) {
   StabilityReport r;
   r.periods = static_cast<int>(d.size());
   r.settled = settled;
   r.multiplier = std::numeric_limits<double>::quiet_NaN();
   r.growth_per_period = r.multiplier;
   if (d.empty()) {
-    r.reason = "no tooth period simulated";
+    r.reason = "no " + period + " simulated";
     return r;
   }
   const std::size_t k = d.size();
@@ -110,7 +110,7 @@ StabilityReport judge_from_rest(const std::vector<double>& d, const std::vector<
   }
   if (settled) {
     r.verdict = Verdict::stable;
-    r.reason = "settled: the once-per-tooth-period state stopped changing";
+    r.reason = "settled: the once-per-" + period + " state stopped changing";
   } else if (r.teeth_jumped_out) {
     r.verdict = Verdict::unstable;
     r.reason = "chatter: teeth left the cut mid-engagement late in the run";
@@ -120,11 +120,11 @@ StabilityReport judge_from_rest(const std::vector<double>& d, const std::vector<
   } else if (r.growth_per_period >= 0) {
     r.verdict = Verdict::unstable;
     r.reason = "chatter: the vibration grows by " + detail::fmt(r.growth_per_period) +
-               " (ln) per tooth period";
+               " (ln) per " + period;
   } else {
     r.verdict = Verdict::stable;
     r.reason = "stable: the vibration decays by " + detail::fmt(-r.growth_per_period) +
-               " (ln) per tooth period";
+               " (ln) per " + period;
   }
   return r;
 }
@@ -168,7 +168,8 @@ constexpr double kGrown = 1e4;     // deviation / disturbance: unstable
 constexpr int kFitWindow = 64;     // last samples the map is fitted to
 
 StabilityReport judge_on_orbit(const std::vector<double>& norms, const Eigen::MatrixXd& states,
-                               bool settled, bool grew, const std::vector<char>& jumped) {
+                               bool settled, bool grew, const std::vector<char>& jumped,
+                               const std::string& period) {
   StabilityReport r;
   r.periods = static_cast<int>(norms.size());
   r.settled = settled;
@@ -197,10 +198,10 @@ StabilityReport judge_on_orbit(const std::vector<double>& norms, const Eigen::Ma
     r.reason = "no estimate of the growth (the state is not finite)";
   } else if (r.multiplier < 1) {
     r.verdict = Verdict::stable;
-    r.reason = "stable: disturbances decay by " + detail::fmt(r.multiplier) + " per tooth period";
+    r.reason = "stable: disturbances decay by " + detail::fmt(r.multiplier) + " per " + period;
   } else {
     r.verdict = Verdict::unstable;
-    r.reason = "chatter: disturbances grow by " + detail::fmt(r.multiplier) + " per tooth period";
+    r.reason = "chatter: disturbances grow by " + detail::fmt(r.multiplier) + " per " + period;
   }
   return r;
 }
@@ -223,6 +224,20 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
                       const BatchOptions& options) {
   validate(model);
   validate(cut);
+  if (options.start_on_steady_cut && has_runout(model.cutter)) {
+    // With runout the chatter-free motion repeats only every revolution and
+    // the one-tooth delay regenerates it (u(t) - u(t - T) != 0): it is not
+    // the structure's response to the nominal forces, and this criterion
+    // has no orbit to start on. Runout is a forcing at the spindle's
+    // harmonics; to first order it leaves the regenerative dynamics as they
+    // are, so the verdict is that of the same cut without runout (README.md,
+    // "Runout"). Runs from rest (below) keep the runout.
+    MillingModel plain = model;
+    plain.cutter.radial_runout_um.clear();
+    BatchResult r = run_batch(plain, cut, options);
+    r.stability.reason += " (judged without the cutter's runout)";
+    return r;
+  }
   if (!(std::isfinite(options.duration_s) && options.duration_s > 0)) {
     throw std::invalid_argument("batch options.duration_s: must be > 0, got " +
                                 detail::fmt(options.duration_s));
@@ -252,6 +267,12 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
 
   // Mid-step angles over one revolution: exactly periodic.
   const int per_rev = m * n_teeth;
+  // The cut repeats every tooth period; with runout the teeth differ, and
+  // it repeats only every revolution: a run from rest then compares the
+  // state once per revolution.
+  const bool runout = engine.runout();
+  const int section = runout ? per_rev : m;
+  const std::string period_name = runout ? "revolution" : "tooth period";
   const double half_sweep = std::numbers::pi / per_rev;  // half of 2 pi / per_rev
   std::vector<double> table_cos(static_cast<std::size_t>(per_rev));
   std::vector<double> table_sin(static_cast<std::size_t>(per_rev));
@@ -284,8 +305,8 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
   std::vector<double> orbit_q(modes, 0.0), orbit_v(modes, 0.0);
   if (options.start_on_steady_cut) {
     const std::int64_t start_phase = (per_rev - su.delay_steps % per_rev) % per_rev;
-    std::vector<double> fx(static_cast<std::size_t>(m)), fy(fx.size());
-    for (int k = 0; k < m; ++k) {
+    std::vector<double> fx(static_cast<std::size_t>(section)), fy(fx.size());
+    for (int k = 0; k < section; ++k) {
       angles((start_phase + k) % per_rev);
       const detail::StepForces f = engine.tooth_forces(tc, ts, 0.0, false, 0.0, 0.0, half_sweep);
       fx[static_cast<std::size_t>(k)] = f.fx_n;
@@ -296,7 +317,7 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
       steady_response(md, md.axis == Axis::x ? fx : fy, orbit_q[i], orbit_v[i]);
       st.set_state(i, orbit_q[i], orbit_v[i]);
     }
-    const std::size_t last = static_cast<std::size_t>(m - 1);
+    const std::size_t last = static_cast<std::size_t>(section - 1);
     engine.set_previous_force(fx[last], fy[last]);
     for (int k = 0; k < su.delay_steps; ++k) {
       angles((start_phase + k) % per_rev);
@@ -312,7 +333,7 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
   const double total = std::ceil(options.duration_s / h - 1e-9);
   if (total > 2e9) throw std::invalid_argument("batch options.duration_s: too many steps");
   const auto steps = static_cast<std::int64_t>(total);
-  const auto max_periods = static_cast<std::size_t>(total / m);
+  const auto max_periods = static_cast<std::size_t>(total / section);
   const std::int64_t record_every =
       options.record_every_s > 0
           ? std::max<std::int64_t>(1, std::llround(options.record_every_s / h))
@@ -365,7 +386,7 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
   if (options.start_on_steady_cut) first_norm = max_norm = section_sample(0);
 
   std::int64_t phase = 0;  // k mod per_rev
-  int in_period = 0;       // k mod m
+  int in_period = 0;       // k mod section
   std::int64_t record_countdown = record_every;
   for (std::int64_t k = 0; k < steps; ++k) {
     angles(phase);
@@ -398,7 +419,7 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
       out.teeth_in_cut.push_back(fn.teeth_cutting);
     }
 
-    if (++in_period == m) {
+    if (++in_period == section) {
       in_period = 0;
       st.flush_tiny();
       const double dk = section_sample(static_cast<Eigen::Index>(out.section.size() + 1));
@@ -420,7 +441,7 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
           // Saturated chatter: teeth jumping out in each of the last two
           // revolutions, after the first quarter of the run.
           const std::size_t np = out.section.size();
-          const auto window = static_cast<std::size_t>(2 * n_teeth);
+          const auto window = static_cast<std::size_t>(runout ? 2 : 2 * n_teeth);
           if (np > std::max(window, max_periods / 4)) {
             bool all = true;
             for (std::size_t i = np - window; i < np && all; ++i) all = jumped[i] != 0;
@@ -434,9 +455,9 @@ BatchResult run_batch(const MillingModel& model, const CutConditions& cut,
   if (options.start_on_steady_cut) {
     out.stability = judge_on_orbit(
         out.section, states.leftCols(static_cast<Eigen::Index>(out.section.size() + 1)), settled,
-        grew, jumped);
+        grew, jumped, period_name);
   } else {
-    out.stability = judge_from_rest(out.section, jumped, settled);
+    out.stability = judge_from_rest(out.section, jumped, settled, period_name);
   }
   return out;
 }

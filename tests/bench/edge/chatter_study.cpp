@@ -2,12 +2,15 @@
 // and depths: false detections and detection delay.
 //
 //   build/release/bin/smc-bench-chatter-detector [--seeds N] [--speeds 750,1100,...]
-//       [--widths 25,37,50] [--fractions 0.3,0.6,0.9,1.3,1.8] [--quick] [--verbose]
+//       [--widths 25,37,50] [--fractions 0.3,0.6,0.9,1.3,1.8] [--runouts 0,10,20]
+//       [--quick] [--verbose]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
 // at that feed is found first by time-domain simulation (smc::machining), and
-// the pass depths are the given fractions of it. Whether a cut is stable is
+// the pass depths are the given fractions of it; each cut is run with every
+// cutter runout given (um, eccentric mounting: services/machining README,
+// "Runout"; the critical depth is the runout-free one). Whether a cut is stable is
 // decided from the simulated vibration, independently of E (the run
 // summary's chatter onset): stable cuts give the false-alarm figures
 // (revolutions in the cut whose statistic exceeded the threshold, confirmed
@@ -44,7 +47,7 @@ std::vector<double> list(const char* text) {
 }
 
 struct Cell {
-  double rpm = 0, width = 0;
+  double rpm = 0, width = 0, runout = 0;
   int runs = 0, stable_runs = 0, unstable_runs = 0, detected = 0, false_detections = 0;
   uint64_t stable_revs = 0, exceed = 0;
   double stable_max = 0, worst_delay_revs = 0, unstable_min_peak = 1e9;
@@ -60,6 +63,7 @@ int main(int argc, char** argv) {
   std::vector<double> speeds{750, 1100, 1500, 2000, 2500, 3000};
   std::vector<double> widths{25, 37, 50};
   std::vector<double> fractions{0.3, 0.6, 0.9, 1.3, 1.8};
+  std::vector<double> runouts{0};
   for (int i = 1; i < argc; ++i) {
     const bool more = i + 1 < argc;
     if (std::strcmp(argv[i], "--seeds") == 0 && more) {
@@ -70,6 +74,8 @@ int main(int argc, char** argv) {
       widths = list(argv[++i]);
     } else if (std::strcmp(argv[i], "--fractions") == 0 && more) {
       fractions = list(argv[++i]);
+    } else if (std::strcmp(argv[i], "--runouts") == 0 && more) {
+      runouts = list(argv[++i]);
     } else if (std::strcmp(argv[i], "--threshold") == 0 && more) {
       threshold_override = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
@@ -83,7 +89,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
-                   "[--quick] [--verbose]\n",
+                   "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose]\n",
                    argv[0]);
       return 2;
     }
@@ -104,8 +110,9 @@ int main(int argc, char** argv) {
       threshold, base.operation().chatter_confirm_revolutions(),
       base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
       base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(), fpt, seeds);
-  std::printf("%6s %6s %8s %6s %9s %8s %8s %8s %8s %9s %10s\n", "rpm", "width", "crit_mm", "runs",
-              "stable", "revs", "exceed", "false", "max_stat", "unstable", "delay_rev");
+  std::printf("%6s %6s %6s %8s %6s %9s %8s %8s %8s %8s %9s %10s\n", "rpm", "width", "runout",
+              "crit_mm", "runs", "stable", "revs", "exceed", "false", "max_stat", "unstable",
+              "delay_rev");
   std::vector<Cell> cells;
   Cell all;
   for (double rpm : speeds) {
@@ -117,87 +124,99 @@ int main(int argc, char** argv) {
       so.relative_tolerance = 1e-2;
       so.max_depth_mm = 20;
       const auto crit = smc::machining::critical_depth_tds(model, rpm, fpt, so);
-      Cell c;
-      c.rpm = rpm;
-      c.width = width;
-      for (double fraction : fractions) {
-        const double depth = fraction * crit.critical_depth_mm;
-        for (int seed = 1; seed <= seeds; ++seed) {
-          std::fprintf(stderr, "\r%4.0f rpm, %2.0f mm wide: depth %.2f mm, seed %d   ", rpm, width,
-                       depth, seed);
-          auto raw = base;
-          *raw.mutable_milling_model() = model_msg;
-          auto* pass = raw.mutable_program()->mutable_passes(0);
-          pass->set_depth_mm(depth);
-          pass->set_spindle_rpm(rpm);
-          pass->set_feedrate_mm_s(fpt * raw.operation().teeth() * rpm / 60.0);
-          raw.mutable_program()->set_total_depth_mm(depth);
-          raw.mutable_simulation()->set_seed(static_cast<uint64_t>(seed));
-          EdgeConfig cfg = edge_config_from_proto(raw);
-          SimulatedMill mill(raw.milling_model(), raw.simulation(), cfg.params.sample_period_s);
-          EdgeCore core(cfg, mill);
-          core.start();
-          RunOptions opts;
-          opts.max_time_s = 120;
-          RunResult run = run_virtual(core, opts);
-          const auto s = summarize(core, run);
-          const double first_detection = s.chatter_detected_s();
-          uint64_t revs = 0, exceed = 0;
-          double max_ratio = 0;
-          for (const auto& r : run.revolutions) {
-            if ((r.active & bit(ModuleId::E)) == 0 || !r.contact) continue;
-            if (first_detection >= 0 && r.t_s > first_detection) break;
-            ++revs;
-            if (verbose && r.chatter_ratio > 0.5 * threshold) {
-              std::fprintf(stderr, "    t %.3f x %.1f engagement %.2f F_Y %.0f stat %.3f\n", r.t_s,
-                           r.x_mm, r.engagement_min, r.f_y_peak_n, r.chatter_ratio);
-            }
-            if (r.chatter_ratio > threshold) ++exceed;
-            max_ratio = std::max(max_ratio, r.chatter_ratio);
+      const auto plain_msg = model_msg;
+      for (double runout : runouts) {
+        model_msg = plain_msg;
+        if (runout > 0) {
+          for (const double r : smc::machining::eccentric_runout_um(
+                   static_cast<int>(model_msg.cutter().teeth()), runout)) {
+            model_msg.mutable_cutter()->add_radial_runout_um(r);
           }
-          ++c.runs;
-          if (verbose) {
+        }
+        Cell c;
+        c.rpm = rpm;
+        c.width = width;
+        c.runout = runout;
+        for (double fraction : fractions) {
+          const double depth = fraction * crit.critical_depth_mm;
+          for (int seed = 1; seed <= seeds; ++seed) {
             std::fprintf(stderr,
-                         "\n  depth %.2f seed %d: onset %.3f s, detected %.3f s, %llu revs, max "
-                         "statistic %.3f, %u passes\n",
-                         depth, seed, s.chatter_onset_s(), first_detection,
-                         static_cast<unsigned long long>(revs), max_ratio, core.program().count);
-          }
-          if (s.chatter_onset_s() < 0) {
-            ++c.stable_runs;
-            c.stable_revs += revs;
-            c.exceed += exceed;
-            c.stable_max = std::max(c.stable_max, max_ratio);
-            c.false_detections += first_detection >= 0 ? 1 : 0;
-          } else {
-            ++c.unstable_runs;
-            if (first_detection >= 0) {
-              ++c.detected;
-              const double delay = (first_detection - s.chatter_onset_s()) * rpm / 60.0;
-              c.worst_delay_revs = std::max(c.worst_delay_revs, delay);
-              c.unstable_min_peak = std::min(c.unstable_min_peak, max_ratio);
+                         "\r%4.0f rpm, %2.0f mm wide, runout %2.0f um: depth %.2f mm, seed %d   ",
+                         rpm, width, runout, depth, seed);
+            auto raw = base;
+            *raw.mutable_milling_model() = model_msg;
+            auto* pass = raw.mutable_program()->mutable_passes(0);
+            pass->set_depth_mm(depth);
+            pass->set_spindle_rpm(rpm);
+            pass->set_feedrate_mm_s(fpt * raw.operation().teeth() * rpm / 60.0);
+            raw.mutable_program()->set_total_depth_mm(depth);
+            raw.mutable_simulation()->set_seed(static_cast<uint64_t>(seed));
+            EdgeConfig cfg = edge_config_from_proto(raw);
+            SimulatedMill mill(raw.milling_model(), raw.simulation(), cfg.params.sample_period_s);
+            EdgeCore core(cfg, mill);
+            core.start();
+            RunOptions opts;
+            opts.max_time_s = 120;
+            RunResult run = run_virtual(core, opts);
+            const auto s = summarize(core, run);
+            const double first_detection = s.chatter_detected_s();
+            uint64_t revs = 0, exceed = 0;
+            double max_ratio = 0;
+            for (const auto& r : run.revolutions) {
+              if ((r.active & bit(ModuleId::E)) == 0 || !r.contact) continue;
+              if (first_detection >= 0 && r.t_s > first_detection) break;
+              ++revs;
+              if (verbose && r.chatter_ratio > 0.5 * threshold) {
+                std::fprintf(stderr, "    t %.3f x %.1f engagement %.2f F_Y %.0f stat %.3f\n",
+                             r.t_s, r.x_mm, r.engagement_min, r.f_y_peak_n, r.chatter_ratio);
+              }
+              if (r.chatter_ratio > threshold) ++exceed;
+              max_ratio = std::max(max_ratio, r.chatter_ratio);
+            }
+            ++c.runs;
+            if (verbose) {
+              std::fprintf(stderr,
+                           "\n  depth %.2f seed %d: onset %.3f s, detected %.3f s, %llu revs, max "
+                           "statistic %.3f, %u passes\n",
+                           depth, seed, s.chatter_onset_s(), first_detection,
+                           static_cast<unsigned long long>(revs), max_ratio, core.program().count);
+            }
+            if (s.chatter_onset_s() < 0) {
+              ++c.stable_runs;
+              c.stable_revs += revs;
+              c.exceed += exceed;
+              c.stable_max = std::max(c.stable_max, max_ratio);
+              c.false_detections += first_detection >= 0 ? 1 : 0;
+            } else {
+              ++c.unstable_runs;
+              if (first_detection >= 0) {
+                ++c.detected;
+                const double delay = (first_detection - s.chatter_onset_s()) * rpm / 60.0;
+                c.worst_delay_revs = std::max(c.worst_delay_revs, delay);
+                c.unstable_min_peak = std::min(c.unstable_min_peak, max_ratio);
+              }
             }
           }
         }
+        std::printf("%6.0f %6.0f %6.0f %8.2f %6d %9d %8llu %8llu %8d %8.3f %5d/%-3d %10.1f\n", rpm,
+                    width, runout, crit.critical_depth_mm, c.runs, c.stable_runs,
+                    static_cast<unsigned long long>(c.stable_revs),
+                    static_cast<unsigned long long>(c.exceed), c.false_detections, c.stable_max,
+                    c.detected, c.unstable_runs, c.worst_delay_revs);
+        std::fflush(stdout);
+        all.runs += c.runs;
+        all.stable_runs += c.stable_runs;
+        all.unstable_runs += c.unstable_runs;
+        all.detected += c.detected;
+        all.false_detections += c.false_detections;
+        all.stable_revs += c.stable_revs;
+        all.exceed += c.exceed;
+        all.stable_max = std::max(all.stable_max, c.stable_max);
+        all.worst_delay_revs = std::max(all.worst_delay_revs, c.worst_delay_revs);
+        if (c.detected > 0)
+          all.unstable_min_peak = std::min(all.unstable_min_peak, c.unstable_min_peak);
+        cells.push_back(c);
       }
-      std::printf("%6.0f %6.0f %8.2f %6d %9d %8llu %8llu %8d %8.3f %5d/%-3d %10.1f\n", rpm, width,
-                  crit.critical_depth_mm, c.runs, c.stable_runs,
-                  static_cast<unsigned long long>(c.stable_revs),
-                  static_cast<unsigned long long>(c.exceed), c.false_detections, c.stable_max,
-                  c.detected, c.unstable_runs, c.worst_delay_revs);
-      std::fflush(stdout);
-      all.runs += c.runs;
-      all.stable_runs += c.stable_runs;
-      all.unstable_runs += c.unstable_runs;
-      all.detected += c.detected;
-      all.false_detections += c.false_detections;
-      all.stable_revs += c.stable_revs;
-      all.exceed += c.exceed;
-      all.stable_max = std::max(all.stable_max, c.stable_max);
-      all.worst_delay_revs = std::max(all.worst_delay_revs, c.worst_delay_revs);
-      if (c.detected > 0)
-        all.unstable_min_peak = std::min(all.unstable_min_peak, c.unstable_min_peak);
-      cells.push_back(c);
     }
   }
   std::fprintf(stderr, "\n");

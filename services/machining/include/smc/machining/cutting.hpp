@@ -87,7 +87,8 @@ struct CutForces {
 };
 CutForces static_forces(const MillingModel& model, const CutConditions& cut,
                         double spindle_angle_rad) noexcept;
-// Mean of static_forces over a tooth period (`samples` equally spaced angles).
+// Mean of static_forces over a tooth period (a revolution with runout;
+// `samples` equally spaced angles).
 CutForces mean_static_forces(const MillingModel& model, const CutConditions& cut,
                              int samples = 3600) noexcept;
 

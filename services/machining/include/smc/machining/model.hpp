@@ -36,7 +36,36 @@ struct Cutter {
   int teeth = 0;              // >= 1
   double radius_mm = 0;       // R_f, > 0
   double lead_angle_deg = 0;  // psi_r in [0, 90): 0 = square shoulder (no axial thrust)
+  // Radial runout per tooth (um): tooth i's edge at radius_mm + r_i / 1000.
+  // Empty (the default) or one value per tooth, each |r_i| <= kMaxRunoutUm.
+  // README.md, "Runout".
+  std::vector<double> radial_runout_um;
 };
+
+inline constexpr double kMaxRunoutUm = 1000;
+
+// True when some tooth has a non-zero runout.
+bool has_runout(const Cutter& cutter) noexcept;
+
+// The runout of a cutter whose axis is off the spindle's by amplitude_um,
+// the offset pointing phase_deg from tooth 0: r_i = e cos(2 pi i / teeth -
+// phase). Throws std::invalid_argument for teeth < 1 or a non-finite value.
+std::vector<double> eccentric_runout_um(int teeth, double amplitude_um, double phase_deg = 0);
+
+// The static chip of tooth i at angle theta with runout (mm), before the
+// structure's vibration: the material left by the tooth that cut deepest
+// before it, min over j = 1..teeth of (j f_t cos(theta) + r_i - r_(i-j)),
+// r in mm (kinematics of Kline and DeVor: a tooth that cuts nothing leaves
+// its share to the next). Equals f_t cos(theta) without runout.
+inline double runout_chip_mm(const double* r_mm, int teeth, int tooth, double feed_mm,
+                             double cos_theta) noexcept {
+  double chip = feed_mm * cos_theta + r_mm[tooth] - r_mm[(tooth + teeth - 1) % teeth];
+  for (int j = 2; j <= teeth; ++j) {
+    const double c = j * feed_mm * cos_theta + r_mm[tooth] - r_mm[(tooth + teeth - j) % teeth];
+    if (c < chip) chip = c;
+  }
+  return chip;
+}
 
 // Where the part sits under the cutter (see the frame above).
 struct Workpiece {
