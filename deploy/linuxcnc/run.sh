@@ -67,7 +67,8 @@ if pgrep -x milltask >/dev/null; then
 fi
 rm -rf "$dir"
 mkdir -p "$dir"
-cp "$here"/smc-mill.ini "$here"/smc-mill.hal "$here"/smc-mill.tbl "$here"/smc-display "$dir"/
+cp "$here"/smc-mill.ini "$here"/smc-mill.hal "$here"/smc-edge.hal "$here"/smc-mill.tbl \
+  "$here"/smc-display "$dir"/
 [[ ${#as[@]} -eq 0 ]] || chown -R "$user" "$dir"
 launch=("${as[@]}" "${env_of[@]}" SMC_CNC_READY="$dir/ready" SMC_CNC_STOP="$dir/stop"
   linuxcnc -r "$dir/smc-mill.ini")

@@ -14,8 +14,10 @@
 #include <fstream>
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "child_process.hpp"
 #include "smc/supervision/gcode.hpp"
 
 namespace sv = smc::supervision;
@@ -129,4 +131,39 @@ TEST_F(LinuxCnc, AProgramThatFailsIsReportedWithLinuxCncsMessage) {
   std::smatch m;
   ASSERT_TRUE(std::regex_search(json, m, final_pos)) << json;
   EXPECT_NEAR(std::stod(m[1]), 0, 1e-3) << "no motion";
+}
+
+// The edge's sampling path: LinuxCNC's stock sampler in the 2 kHz servo
+// thread, read by the edge as a HAL component (smc-edge hal-samples, the
+// reader the LinuxCNC drive uses), while the machine runs a program: 20,000
+// records (10 s) with none lost or repeated, the axis seen moving and the
+// spindle turning.
+TEST_F(LinuxCnc, TheEdgeSeesEveryServoPeriodWhileTheMachineCuts) {
+  sv::FixedProgram p;
+  p.passes[p.count++] = {1, 10, 1500, 0};
+  p.passes[p.count++] = {1, 10, 1500, 0};
+  const std::string file =
+      write("part.ngc", sv::render_gcode(p, {4, 25, 20, 5, 0.6, 36}, {.title = "sampling"}));
+  int program_status = -1;
+  std::string program_json;
+  std::thread cnc(
+      [&] { program_json = run_program(file, "--adaptive-feed 0.5", &program_status); });
+  int st = -1;
+  const std::string json =
+      capture(src("deploy/linuxcnc/run.sh") + " exec " + smc::test::bin_path("smc-edge") +
+                  " hal-samples --count 20000 --timeout 60",
+              &st);
+  cnc.join();
+  EXPECT_EQ(program_status, 0) << program_json;
+  ASSERT_EQ(st, 0) << json;
+  EXPECT_EQ(numbers_after(json, "records"), std::vector<double>{20000}) << json;
+  EXPECT_EQ(numbers_after(json, "lost"), std::vector<double>{0}) << json;
+  EXPECT_EQ(numbers_after(json, "repeated"), std::vector<double>{0}) << json;
+  const auto x_max = numbers_after(json, "x_max_mm");
+  const auto x_min = numbers_after(json, "x_min_mm");
+  ASSERT_EQ(x_max.size(), 1u);
+  EXPECT_GT(x_max[0] - x_min[0], 40) << "the X axis was seen moving across the part: " << json;
+  const auto revs = numbers_after(json, "spindle_revs");
+  ASSERT_EQ(revs.size(), 1u);
+  EXPECT_GT(revs[0], 10) << "the spindle was seen turning: " << json;
 }

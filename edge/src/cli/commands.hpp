@@ -18,5 +18,8 @@ struct Failure : std::runtime_error {
 void add_simulate(CLI::App& app);
 void add_check(CLI::App& app);
 void add_run(CLI::App& app);
+#if SMC_HAVE_LINUXCNC
+void add_hal(CLI::App& app);
+#endif
 
 }  // namespace smc::edge::cli

@@ -22,6 +22,9 @@ int main(int argc, char** argv) {
   smc::edge::cli::add_simulate(app);
   smc::edge::cli::add_check(app);
   smc::edge::cli::add_run(app);
+#if SMC_HAVE_LINUXCNC
+  smc::edge::cli::add_hal(app);
+#endif
   app.parse_complete_callback([&] { smc::log::init(log_opts); });
   try {
     app.parse(argc, argv);
