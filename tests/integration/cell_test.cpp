@@ -214,6 +214,34 @@ TEST_F(Cell, ChatterUnderSmcIMarksItsModelsSuspectAndThePartMovesToAMachineWhose
   EXPECT_NE(c.explanation.find("is suspect"), std::string::npos) << c.explanation;
 }
 
+// A machine added to a running cell with `smc-cell catalog apply` takes jobs
+// without a restart of the cell.
+TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
+  start_cell();
+  start_edge("mill-3");  // its edge is up before the cell knows the machine
+  const auto doc = dir_ / "mill-3.textproto";
+  {
+    std::ofstream f(doc);
+    f << "machines { id: \"mill-3\" name: \"third mill\" max_spindle_power_w: 745.7 "
+         "max_feedrate_mm_s: 36 max_spindle_rpm: 3000 }\n";
+  }
+  ASSERT_EQ(run_cmd({bin("smc-cell"), "--log-level", "warn", "catalog", "apply", doc.string(),
+                     "--db", db_, "--author", "test", "--reason", "a third mill"}),
+            0);
+  const auto pinned = dir_ / "on-mill-3.textproto";
+  {
+    std::ofstream f(pinned);
+    f << "part_id: \"housing-js\"\nmachine_id: \"mill-3\"\n";
+  }
+  const std::string id = submit(pinned.string());
+  ASSERT_FALSE(id.empty());
+  ASSERT_TRUE(wait_jobs(
+      {id}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
+  const auto j = *job(id);
+  EXPECT_EQ(j.state, cfg::JOB_DONE);
+  EXPECT_EQ(j.machine_id, "mill-3");
+}
+
 TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {
   start_cell();
   start_edge("mill-1");

@@ -9,6 +9,7 @@ std::vector<MachineModels> machine_candidates(
     const std::function<bool(const std::string&)>& available) {
   std::vector<MachineModels> out;
   for (auto& m : db.machines()) {
+    if (m.retired_at_ms != 0) continue;
     if (!job.spec.machine_id().empty() && m.id != job.spec.machine_id()) continue;
     MachineModels c;
     c.available = !available || available(m.id);

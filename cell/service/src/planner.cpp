@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 
@@ -18,33 +19,75 @@ namespace smc::cell {
 
 namespace {
 
-bool usable(const store::ProcessModel& m) { return m.validated && m.suspect_reason.empty(); }
-
-std::string describe(const store::ProcessModel& m) {
-  std::ostringstream o;
-  o << store::kind_name(m.kind) << " model " << m.id << " (" << store::provenance_name(m.provenance)
-    << (m.validated ? ", validated" : ", not validated")
-    << (m.part_id.empty() ? "" : ", part " + m.part_id) << ", " << m.machine_id
-    << (m.suspect_reason.empty() ? "" : ", suspect: " + m.suspect_reason) << ")";
-  return o.str();
-}
-
-// Why no model of this kind can be used.
-std::string missing(const std::vector<store::ProcessModel>& models, store::ModelKind kind,
-                    const char* name) {
-  for (const auto& m : models) {
-    if (m.kind == kind && m.validated && !m.suspect_reason.empty()) {
-      return std::string("the ") + name + " model " + m.id + " is suspect";
-    }
-  }
-  return std::string("no validated ") + name + " model";
-}
-
 std::string fmt(double v, int digits = 3) {
   std::ostringstream o;
   o.precision(digits);
   o << v;
   return o.str();
+}
+
+// A limit or a job's value as written: 2000, 0.5, 47.5.
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+// The job's conditions a model's validity range is checked against.
+struct Cut {
+  double rpm = 0, width_mm = 0;
+};
+
+Cut cut_of(const PlanInputs& in) { return {in.job.spec.spindle_rpm(), in.part.width_mm}; }
+
+// Why the job is outside the model's validity range, or "" (0: no bound).
+std::string out_of_range(const store::ProcessModel& m, const Cut& c) {
+  const auto& v = m.validity;
+  if (v.min_spindle_rpm() > 0 && c.rpm < v.min_spindle_rpm()) {
+    return "valid from " + num(v.min_spindle_rpm()) + " rpm, the job runs at " + num(c.rpm);
+  }
+  if (v.max_spindle_rpm() > 0 && c.rpm > v.max_spindle_rpm()) {
+    return "valid up to " + num(v.max_spindle_rpm()) + " rpm, the job runs at " + num(c.rpm);
+  }
+  if (v.min_width_mm() > 0 && c.width_mm < v.min_width_mm()) {
+    return "valid from " + num(v.min_width_mm()) + " mm wide, the part is " + num(c.width_mm);
+  }
+  if (v.max_width_mm() > 0 && c.width_mm > v.max_width_mm()) {
+    return "valid up to " + num(v.max_width_mm()) + " mm wide, the part is " + num(c.width_mm);
+  }
+  return {};
+}
+
+bool usable(const store::ProcessModel& m, const Cut& c) {
+  return m.validated && m.suspect_reason.empty() && out_of_range(m, c).empty();
+}
+
+std::string describe(const store::ProcessModel& m, const Cut& c) {
+  std::ostringstream o;
+  const std::string range = out_of_range(m, c);
+  o << store::kind_name(m.kind) << " model " << m.id << " (" << store::provenance_name(m.provenance)
+    << (m.validated ? ", validated" : ", not validated")
+    << (m.part_id.empty() ? "" : ", part " + m.part_id) << ", " << m.machine_id
+    << (m.suspect_reason.empty() ? "" : ", suspect: " + m.suspect_reason)
+    << (range.empty() ? "" : ", outside its validity range: " + range) << ")";
+  return o.str();
+}
+
+// Why no model of this kind can be used.
+std::string missing(const std::vector<store::ProcessModel>& models, store::ModelKind kind,
+                    const char* name, const Cut& c) {
+  for (const auto& m : models) {
+    if (m.kind == kind && m.validated && !m.suspect_reason.empty()) {
+      return std::string("the ") + name + " model " + m.id + " is suspect";
+    }
+  }
+  for (const auto& m : models) {
+    if (m.kind == kind && m.validated && !out_of_range(m, c).empty()) {
+      return std::string("the ") + name + " model " + m.id + " is outside its validity range (" +
+             out_of_range(m, c) + ")";
+    }
+  }
+  return std::string("no validated ") + name + " model";
 }
 
 // The models on `machine` that make SMC I: validated and not suspect.
@@ -53,11 +96,12 @@ struct Usable {
   bool smc1() const { return force && milling; }
 };
 
-Usable usable_on(const std::vector<store::ProcessModel>& models, const std::string& machine) {
+Usable usable_on(const std::vector<store::ProcessModel>& models, const std::string& machine,
+                 const Cut& c) {
   Usable u;
   if (machine.empty()) return u;
   for (const auto& m : models) {
-    if (!usable(m) || m.machine_id != machine) continue;
+    if (!usable(m, c) || m.machine_id != machine) continue;
     if (m.kind == store::ModelKind::kForceProcess && !u.force) u.force = m;
     if (m.kind == store::ModelKind::kMilling && !u.milling) u.milling = m;
   }
@@ -65,21 +109,21 @@ Usable usable_on(const std::vector<store::ProcessModel>& models, const std::stri
 }
 
 // Why these models do not make SMC I.
-std::string why_not(const std::vector<store::ProcessModel>& models, const Usable& u) {
+std::string why_not(const std::vector<store::ProcessModel>& models, const Usable& u, const Cut& c) {
   if (!u.force && !u.milling) {
-    const std::string f = missing(models, store::ModelKind::kForceProcess, "force-process");
-    const std::string m = missing(models, store::ModelKind::kMilling, "structural");
+    const std::string f = missing(models, store::ModelKind::kForceProcess, "force-process", c);
+    const std::string m = missing(models, store::ModelKind::kMilling, "structural", c);
     return f == "no validated force-process model" && m == "no validated structural model"
                ? std::string("no validated models")
                : f + " and " + m;
   }
-  if (!u.force) return missing(models, store::ModelKind::kForceProcess, "force-process");
-  return missing(models, store::ModelKind::kMilling, "structural");
+  if (!u.force) return missing(models, store::ModelKind::kForceProcess, "force-process", c);
+  return missing(models, store::ModelKind::kMilling, "structural", c);
 }
 
-std::string listing(const std::vector<store::ProcessModel>& models) {
+std::string listing(const std::vector<store::ProcessModel>& models, const Cut& c) {
   std::string out;
-  for (const auto& m : models) out += (out.empty() ? "" : "; ") + describe(m);
+  for (const auto& m : models) out += (out.empty() ? "" : "; ") + describe(m, c);
   return out.empty() ? "none" : out;
 }
 
@@ -98,8 +142,8 @@ Selection select_variant(const PlanInputs& in) {
   std::ostringstream why;
   const std::string on = in.machine.id.empty() ? "any machine" : in.machine.id;
   why << "models on " << on << " for tool " << in.tool.id << " and material " << in.part.material_id
-      << ": " << listing(in.models) << ". ";
-  const Usable u = usable_on(in.models, in.machine.id);
+      << ": " << listing(in.models, cut_of(in)) << ". ";
+  const Usable u = usable_on(in.models, in.machine.id, cut_of(in));
   if (u.smc1()) {
     sel.variant = smc::config::SMC_I;
     sel.force = u.force;
@@ -108,7 +152,8 @@ Selection select_variant(const PlanInputs& in) {
   } else {
     sel.variant = smc::config::SMC_II;
     why << "SMC II on " << on << " (job shop): "
-        << (in.machine.id.empty() ? std::string("no machine was given") : why_not(in.models, u))
+        << (in.machine.id.empty() ? std::string("no machine was given")
+                                  : why_not(in.models, u, cut_of(in)))
         << kSmc2Why;
   }
   sel.explanation = why.str();
@@ -137,7 +182,7 @@ Selection bind_and_select(PlanInputs& in, const std::vector<MachineModels>& mach
   bool any_available = false;
   for (const MachineModels* m : order) any_available = any_available || m->available;
   for (const MachineModels* m : order) {
-    if ((m->available || !any_available) && usable_on(m->models, m->machine.id).smc1())
+    if ((m->available || !any_available) && usable_on(m->models, m->machine.id, cut_of(in)).smc1())
       return bind(*m);
   }
   // Else SMC II on whichever machine is free, each machine's reason given.
@@ -146,16 +191,17 @@ Selection bind_and_select(PlanInputs& in, const std::vector<MachineModels>& mach
   std::ostringstream reasons;
   for (const MachineModels* m : order) {
     in.models.insert(in.models.end(), m->models.begin(), m->models.end());
-    const Usable u = usable_on(m->models, m->machine.id);
+    const Usable u = usable_on(m->models, m->machine.id, cut_of(in));
     reasons << (m == order.front() ? "" : "; ") << m->machine.id << ": "
             << (u.smc1() ? std::string("has usable models but its edge is lost")
-                         : why_not(m->models, u));
+                         : why_not(m->models, u, cut_of(in)));
   }
   Selection sel;
   sel.variant = smc::config::SMC_II;
   std::ostringstream why;
   why << "models on every machine for tool " << in.tool.id << " and material "
-      << in.part.material_id << ": " << listing(in.models) << ". SMC II on any machine (job shop): "
+      << in.part.material_id << ": " << listing(in.models, cut_of(in))
+      << ". SMC II on any machine (job shop): "
       << (order.empty() ? std::string("no machines") : reasons.str()) << kSmc2Why;
   sel.explanation = why.str();
   return sel;
@@ -242,7 +288,17 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
     // Unbounded and stable somewhere: stable up to the search's maximum depth.
     out.critical_depth_mm = crit.bounded ? crit.critical_depth_mm : so.max_depth_mm;
     const double margin = options_.margin;
-    const double allowed = margin * out.critical_depth_mm;
+    double allowed = margin * out.critical_depth_mm;
+    // No pass deeper than the models were made for (their validity range).
+    std::string depth_note;
+    for (const auto* pm : {&*sel.force, &*sel.milling}) {
+      const double max_depth = pm->validity.max_depth_mm();
+      if (max_depth > 0 && max_depth < allowed) {
+        allowed = max_depth;
+        depth_note = " Passes no deeper than " + num(max_depth) + " mm: model " + pm->id +
+                     " is valid to that depth.";
+      }
+    }
     const int first = std::max(1, static_cast<int>(std::ceil(job.depth_mm() / allowed - 1e-9)));
     auto too_many = [&](int n, const std::string& why) {
       return std::runtime_error("job " + in.job.id + ": " + why + " would need " +
@@ -310,7 +366,7 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
     why << c.explanation() << " Critical depth at " << rpm << " rpm on " << in.machine.id << ": "
         << fmt(out.critical_depth_mm) << " mm; with a " << margin << " margin, " << passes
         << " equal pass" << (passes == 1 ? "" : "es") << " of " << fmt(job.depth_mm() / passes)
-        << " mm." << feed_note;
+        << " mm." << depth_note << feed_note;
     if (options_.guard_smc1) {
       why << " The chatter detector watches the cut (smc1_guarded): chatter means the models "
              "are wrong; it is suppressed and the models are marked suspect.";

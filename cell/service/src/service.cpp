@@ -119,6 +119,7 @@ struct CellService::Impl {
   std::map<std::string, Progress> progress;                             // by job id
   std::map<std::string, std::vector<machining::ForceSample>> learning;  // by job id
   std::set<std::string> chatter_seen;                                   // "<machine>#<event id>"
+  std::set<std::string> retired;              // machines that take no new jobs
   std::map<std::string, std::string> out_on;  // machine -> job whose assignment was sent
   int64_t data_version = -1;
   Clock::time_point started = Clock::now();
@@ -150,7 +151,24 @@ struct CellService::Impl {
     dispatcher.on(progress_reader, [this] { take_progress(); });
     dispatcher.on(chatter_reader, [this] { take_chatter(); });
     dispatcher.poll([this] { take_summaries(); });  // high rate: in batches, never a wake-up
-    for (const auto& m : db.machines()) mills[m.id];
+    refresh_machines();
+  }
+
+  // The machines the cell dispatches to: those of the database that are not
+  // retired. Read at start and whenever the database changes, so a machine
+  // added by `smc-cell catalog apply` becomes eligible without a restart.
+  void refresh_machines() {
+    for (const auto& m : db.machines()) {
+      if (m.retired_at_ms != 0) {
+        if (retired.insert(m.id).second) spdlog::info("machine {} is retired", m.id);
+        continue;
+      }
+      if (mills.find(m.id) == mills.end()) {
+        mills[m.id];
+        spdlog::info("machine {} ({}) is in the cell", m.id, m.name);
+      }
+      retired.erase(m.id);
+    }
   }
 
   static cfg::SupervisorConfig load_defaults(const std::string& path) {
@@ -290,6 +308,7 @@ struct CellService::Impl {
     }
     std::vector<MillView> views;
     for (const auto& [id, mill] : mills) {
+      if (retired.count(id)) continue;
       views.push_back({id, mill.alive,
                        mill.state == smc_data_EDGE_IDLE || mill.state == smc_data_EDGE_CONFIGURED});
     }
@@ -590,6 +609,7 @@ struct CellService::Impl {
       if (v != data_version || Clock::now() - last_scan > 1s) {
         data_version = v;
         last_scan = Clock::now();
+        refresh_machines();
         for (const auto& j : db.jobs({.state = cfg::JOB_QUEUED})) {
           if (!progress.count(j.id)) publish_status(j, "queued");
         }

@@ -9,20 +9,16 @@
 #include <string>
 
 #include "registry.hpp"
+#include "smc/cell/store/catalog_docs.hpp"
 #include "smc/cell/store/seed.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/documents/load.hpp"
 
 namespace {
 
+using smc::cell::cli::add_db_option;
 using smc::cell::cli::Failure;
 namespace store = smc::cell::store;
-
-void add_db_option(CLI::App* cmd, std::string& db) {
-  db = store::default_db_path();
-  cmd->add_option("--db", db, "Cell database file (default: $SMC_CELL_DB or ./smc-cell.db)")
-      ->capture_default_str();
-}
 
 void print_summary(store::Store& s) {
   const store::Counts c = s.counts();
@@ -77,7 +73,7 @@ SMC_CELL_COMMAND(db, 21) {
   struct InitArgs {
     std::string db;
     bool seed = false;
-    std::string models = store::default_models_dir();
+    std::string catalog = store::default_catalog_dir();
   };
   auto init_args = std::make_shared<InitArgs>();
   auto* init = db->add_subcommand(
@@ -86,20 +82,20 @@ SMC_CELL_COMMAND(db, 21) {
       "the demo's machines, tool, material and parts (idempotent)");
   add_db_option(init, init_args->db);
   init->add_flag("--seed", init_args->seed,
-                 "Add the demo seed data: the paper's machine as mill-1 and mill-2, its face "
-                 "mill, 6061-T6, bracket-tl (validated models) and housing-js (none)");
-  init->add_option("--models", init_args->models,
-                   "Folder with paper_face_mill.textproto and paper_force_model.textproto for "
-                   "the seed (missing ones: built-in paper values)")
+                 "Add the demo seed data: the catalog documents of cell/catalog (the paper's "
+                 "machine as mill-1 and mill-2, its face mill, 6061-T6, bracket-tl with "
+                 "validated models and housing-js without), applied as `smc-cell catalog "
+                 "apply` does");
+  init->add_option("--catalog", init_args->catalog, "Catalog folder for --seed")
       ->capture_default_str();
   init->callback([init_args] {
     store::Store s = store::Store::open(init_args->db, store::OpenMode::kCreate);
     if (init_args->seed) {
       try {
-        const auto inserted = store::seed_demo(s, store::SeedOptions{init_args->models});
-        std::printf("seed: %lld rows added%s\n", static_cast<long long>(inserted),
-                    inserted == 0 ? " (already seeded)" : "");
-      } catch (const smc::documents::DocumentError& e) {
+        const auto inserted = store::seed_demo(s, store::SeedOptions{init_args->catalog});
+        std::printf("seed: %lld entities added from %s%s\n", static_cast<long long>(inserted),
+                    init_args->catalog.c_str(), inserted == 0 ? " (already seeded)" : "");
+      } catch (const store::CatalogError& e) {
         throw Failure(2, std::string(e.what()) + "\nseed: nothing written");
       }
     }

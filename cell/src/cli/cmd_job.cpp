@@ -17,14 +17,9 @@
 
 namespace {
 
+using smc::cell::cli::add_db_option;
 using smc::cell::cli::Failure;
 namespace store = smc::cell::store;
-
-void add_db_option(CLI::App* cmd, std::string& db) {
-  db = store::default_db_path();
-  cmd->add_option("--db", db, "Cell database file (default: $SMC_CELL_DB or ./smc-cell.db)")
-      ->capture_default_str();
-}
 
 std::string or_any(const std::string& s) { return s.empty() ? "any" : s; }
 

@@ -35,6 +35,9 @@ struct Failure : std::runtime_error {
   int exit_code;
 };
 
+// --db FILE, defaulting to $SMC_CELL_DB or ./smc-cell.db.
+void add_db_option(CLI::App* cmd, std::string& db);
+
 }  // namespace smc::cell::cli
 
 // `order` sorts subcommands in --help.

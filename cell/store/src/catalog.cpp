@@ -57,26 +57,31 @@ std::string next_id(sqlite3* db, const std::string& file, const std::string& ser
 namespace {
 
 const char* const kMachineCols =
-    "SELECT id, name, max_spindle_power_w, max_feedrate_mm_s, max_spindle_rpm FROM machines ";
-const char* const kToolCols = "SELECT id, name, teeth, radius_mm, lead_angle_deg FROM tools ";
-const char* const kMaterialCols = "SELECT id, name FROM materials ";
+    "SELECT id, name, max_spindle_power_w, max_feedrate_mm_s, max_spindle_rpm, min_spindle_rpm, "
+    "drive, COALESCE(retired_at_ms, 0) FROM machines ";
+const char* const kToolCols =
+    "SELECT id, name, teeth, radius_mm, lead_angle_deg, COALESCE(retired_at_ms, 0) FROM tools ";
+const char* const kMaterialCols = "SELECT id, name, COALESCE(retired_at_ms, 0) FROM materials ";
 const char* const kPartCols =
     "SELECT id, name, material_id, COALESCE(tool_id, ''), width_mm, offset_mm, length_mm, "
-    "total_depth_mm, feedrate_mm_s, spindle_rpm FROM parts ";
+    "total_depth_mm, feedrate_mm_s, spindle_rpm, COALESCE(retired_at_ms, 0) FROM parts ";
 const char* const kModelCols =
     "SELECT id, kind, machine_id, tool_id, material_id, COALESCE(part_id, ''), provenance, "
-    "validated, document, fit, note, created_at_ms, suspect_reason FROM process_models ";
+    "validated, document, fit, note, created_at_ms, suspect_reason, validity, "
+    "COALESCE(retired_at_ms, 0) FROM process_models ";
 
 Machine read_machine(const Stmt& s) {
-  return Machine{s.text(0), s.text(1), s.real(2), s.real(3), s.real(4)};
+  return Machine{s.text(0), s.text(1), s.real(2), s.real(3),
+                 s.real(4), s.real(5), s.text(6), s.int64(7)};
 }
 Tool read_tool(const Stmt& s) {
-  return Tool{s.text(0), s.text(1), static_cast<std::uint32_t>(s.int64(2)), s.real(3), s.real(4)};
+  return Tool{s.text(0), s.text(1), static_cast<std::uint32_t>(s.int64(2)),
+              s.real(3), s.real(4), s.int64(5)};
 }
-Material read_material(const Stmt& s) { return Material{s.text(0), s.text(1)}; }
+Material read_material(const Stmt& s) { return Material{s.text(0), s.text(1), s.int64(2)}; }
 Part read_part(const Stmt& s) {
-  return Part{s.text(0), s.text(1), s.text(2), s.text(3), s.real(4),
-              s.real(5), s.real(6), s.real(7), s.real(8), s.real(9)};
+  return Part{s.text(0), s.text(1), s.text(2), s.text(3), s.real(4),  s.real(5),
+              s.real(6), s.real(7), s.real(8), s.real(9), s.int64(10)};
 }
 
 ProcessModel read_model(const Stmt& s, const std::string& file) {
@@ -99,6 +104,8 @@ ProcessModel read_model(const Stmt& s, const std::string& file) {
   m.note = s.text(10);
   m.created_at_ms = s.int64(11);
   m.suspect_reason = s.text(12);
+  if (!s.is_null(13)) detail::deserialize(s.blob(13), m.validity, file, what + " validity");
+  m.retired_at_ms = s.int64(14);
   return m;
 }
 
@@ -121,12 +128,14 @@ std::optional<T> read_one(Stmt& s, Read read) {
 
 void Store::put_machine(const Machine& m) {
   Stmt(db_.get(), path_,
-       "INSERT INTO machines (id, name, max_spindle_power_w, max_feedrate_mm_s, max_spindle_rpm) "
-       "VALUES (?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET name = excluded.name, "
-       "max_spindle_power_w = excluded.max_spindle_power_w, "
+       "INSERT INTO machines (id, name, max_spindle_power_w, max_feedrate_mm_s, max_spindle_rpm, "
+       "min_spindle_rpm, drive) VALUES (?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET "
+       "name = excluded.name, max_spindle_power_w = excluded.max_spindle_power_w, "
        "max_feedrate_mm_s = excluded.max_feedrate_mm_s, "
-       "max_spindle_rpm = excluded.max_spindle_rpm")
-      .bind(m.id, m.name, m.max_spindle_power_w, m.max_feedrate_mm_s, m.max_spindle_rpm)
+       "max_spindle_rpm = excluded.max_spindle_rpm, min_spindle_rpm = excluded.min_spindle_rpm, "
+       "drive = excluded.drive")
+      .bind(m.id, m.name, m.max_spindle_power_w, m.max_feedrate_mm_s, m.max_spindle_rpm,
+            m.min_spindle_rpm, m.drive.empty() ? std::string("simulated") : m.drive)
       .run();
 }
 
@@ -288,11 +297,15 @@ std::string Store::add_model(const ProcessModel& m) {
   }
   Stmt ins(db_.get(), path_,
            "INSERT INTO process_models (id, kind, machine_id, tool_id, material_id, part_id, "
-           "provenance, validated, document, fit, note, created_at_ms, suspect_reason) "
-           "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+           "provenance, validated, document, fit, note, created_at_ms, suspect_reason, validity) "
+           "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  std::optional<Blob> validity;
+  if (m.validity.ByteSizeLong() > 0) {
+    validity = Blob{detail::serialize(m.validity, "validity range")};
+  }
   ins.bind(id, static_cast<int>(m.kind), m.machine_id, m.tool_id, m.material_id, or_null(m.part_id),
            static_cast<int>(m.provenance), m.validated, Blob{document}, fit, m.note,
-           detail::now_ms(), m.suspect_reason);
+           detail::now_ms(), m.suspect_reason, validity);
   ins.run();
   tx.commit();
   return id;
@@ -347,7 +360,8 @@ std::vector<ProcessModel> Store::find_models(const std::string& machine_id,
                                              const std::string& part_id) {
   Stmt s(db_.get(), path_,
          std::string(kModelCols) +
-             "WHERE (?1 = '' OR machine_id = ?1) AND (?2 = '' OR tool_id = ?2) "
+             "WHERE retired_at_ms IS NULL AND (?1 = '' OR machine_id = ?1) AND (?2 = '' OR tool_id "
+             "= ?2) "
              "AND (?3 = '' OR material_id = ?3) "
              "AND (?4 = '' OR part_id = ?4 OR part_id IS NULL) "
              "ORDER BY (part_id IS NULL), validated DESC, (suspect_reason != ''), "
@@ -357,6 +371,72 @@ std::vector<ProcessModel> Store::find_models(const std::string& machine_id,
   std::vector<ProcessModel> out;
   while (s.step()) out.push_back(read_model(s, path_));
   return out;
+}
+
+// ------------------------------------------------------------------ history --
+
+void Store::record_catalog_event(const std::string& kind, const std::string& entity_id,
+                                 const std::string& action, const std::string& author,
+                                 const std::string& reason, const std::string& detail) {
+  Stmt(db_.get(), path_,
+       "INSERT INTO catalog_history (time_ms, author, kind, entity_id, action, reason, detail) "
+       "VALUES (?, ?, ?, ?, ?, ?, ?)")
+      .bind(detail::now_ms(), author.empty() ? std::string("unknown") : author, kind, entity_id,
+            action, reason, detail)
+      .run();
+}
+
+std::vector<CatalogEvent> Store::history(const std::string& kind, const std::string& entity_id) {
+  Stmt s(
+      db_.get(), path_,
+      "SELECT seq, time_ms, author, kind, entity_id, action, reason, detail FROM catalog_history "
+      "WHERE (?1 = '' OR kind = ?1) AND (?2 = '' OR entity_id = ?2) ORDER BY seq");
+  s.bind(kind, entity_id);
+  std::vector<CatalogEvent> out;
+  while (s.step()) {
+    out.push_back(
+        {s.int64(0), s.int64(1), s.text(2), s.text(3), s.text(4), s.text(5), s.text(6), s.text(7)});
+  }
+  return out;
+}
+
+namespace {
+
+const char* table_of(const std::string& kind) {
+  if (kind == "machine") return "machines";
+  if (kind == "tool") return "tools";
+  if (kind == "material") return "materials";
+  if (kind == "part") return "parts";
+  if (kind == "model") return "process_models";
+  return nullptr;
+}
+
+}  // namespace
+
+void Store::retire(const std::string& kind, const std::string& id, const std::string& author,
+                   const std::string& reason) {
+  const char* table = table_of(kind);
+  if (table == nullptr) {
+    throw StoreError(path_ + ": retire: unknown kind '" + kind +
+                     "' (known: machine, tool, material, part, model)");
+  }
+  if (reason.empty()) throw StoreError(path_ + ": retire " + kind + " '" + id + "': give a reason");
+  detail::Tx tx(db_.get(), path_);
+  Stmt(db_.get(), path_,
+       std::string("UPDATE ") + table +
+           " SET retired_at_ms = ? WHERE id = ? AND retired_at_ms IS NULL")
+      .bind(detail::now_ms(), id)
+      .run();
+  if (sqlite3_changes(db_.get()) == 0) {
+    const bool exists =
+        Stmt(db_.get(), path_, std::string("SELECT 1 FROM ") + table + " WHERE id = ?")
+            .bind(id)
+            .step();
+    throw StoreError(path_ + ": retire: " + kind + " '" + id + "' " +
+                     (exists ? "is retired already" : "is unknown"));
+  }
+  record_catalog_event(kind, id, "retired", author, reason, "");
+  tx.commit();
 }
 
 }  // namespace smc::cell::store

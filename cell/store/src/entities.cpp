@@ -15,7 +15,8 @@ bool allowed_transition(JobState from, JobState to) noexcept {
     case JOB_QUEUED:
       return to == JOB_PLANNED || to == JOB_FAILED;
     case JOB_PLANNED:
-      return to == JOB_ASSIGNED || to == JOB_FAILED;
+      // planned -> queued: the plan is made again (its machine changed).
+      return to == JOB_ASSIGNED || to == JOB_FAILED || to == JOB_QUEUED;
     case JOB_ASSIGNED:
       return to == JOB_RUNNING || to == JOB_INTERRUPTED;
     case JOB_RUNNING:

@@ -100,15 +100,23 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
 
   std::optional<Part> part;
   if (job.part_id().empty()) {
-    errors.push_back({"job.part_id", "missing",
-                      "set part_id to one of: " + list(known("SELECT id FROM parts ORDER BY id"))});
+    errors.push_back(
+        {"job.part_id", "missing",
+         "set part_id to one of: " +
+             list(known("SELECT id FROM parts WHERE retired_at_ms IS NULL ORDER BY id"))});
   } else {
     part = store.part(job.part_id());
     if (!part) {
-      errors.push_back(
-          {"job.part_id",
-           detail::unknown_ref("part", job.part_id(), known("SELECT id FROM parts ORDER BY id")),
-           "use one of the known part ids, or add the part to the cell database"});
+      errors.push_back({"job.part_id",
+                        detail::unknown_ref(
+                            "part", job.part_id(),
+                            known("SELECT id FROM parts WHERE retired_at_ms IS NULL ORDER BY id")),
+                        "use one of the known part ids, or add the part to the cell database"});
+    } else if (part->retired_at_ms != 0) {
+      errors.push_back({"job.part_id", "part '" + part->id + "' is retired",
+                        "use one of: " + list(known("SELECT id FROM parts WHERE retired_at_ms IS "
+                                                    "NULL ORDER BY id"))});
+      part.reset();
     }
   }
 
@@ -120,12 +128,18 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
         if (m.name == job.material()) mat = m;
       }
     }
-    if (!mat) {
-      errors.push_back({"job.material",
-                        detail::unknown_ref("material", job.material(),
-                                            known("SELECT id FROM materials ORDER BY id")),
-                        part ? "leave material out for the part's, '" + part->material_id + "'"
-                             : "use one of the known material ids"});
+    if (mat && mat->retired_at_ms != 0) {
+      errors.push_back({"job.material", "material '" + mat->id + "' is retired",
+                        "use one of: " + list(known("SELECT id FROM materials WHERE retired_at_ms "
+                                                    "IS NULL ORDER BY id"))});
+    } else if (!mat) {
+      errors.push_back(
+          {"job.material",
+           detail::unknown_ref(
+               "material", job.material(),
+               known("SELECT id FROM materials WHERE retired_at_ms IS NULL ORDER BY id")),
+           part ? "leave material out for the part's, '" + part->material_id + "'"
+                : "use one of the known material ids"});
     } else if (part && mat->id != part->material_id) {
       errors.push_back({"job.material",
                         "part '" + part->id + "' is made of '" + part->material_id + "', not '" +
@@ -143,12 +157,18 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
     if (part) {
       errors.push_back(
           {"job.tool_id", "missing, and part '" + part->id + "' names no default tool",
-           "set tool_id to one of: " + list(known("SELECT id FROM tools ORDER BY id"))});
+           "set tool_id to one of: " +
+               list(known("SELECT id FROM tools WHERE retired_at_ms IS NULL ORDER BY id"))});
     }
-  } else if (!store.tool(job.tool_id())) {
+  } else if (const auto t = store.tool(job.tool_id()); t && t->retired_at_ms != 0) {
+    errors.push_back({"job.tool_id", "tool '" + t->id + "' is retired",
+                      "use one of: " + list(known("SELECT id FROM tools WHERE retired_at_ms IS "
+                                                  "NULL ORDER BY id"))});
+  } else if (!t) {
     errors.push_back(
         {"job.tool_id",
-         detail::unknown_ref("tool", job.tool_id(), known("SELECT id FROM tools ORDER BY id")),
+         detail::unknown_ref("tool", job.tool_id(),
+                             known("SELECT id FROM tools WHERE retired_at_ms IS NULL ORDER BY id")),
          "use one of the known tool ids, or leave tool_id out for the part's tool"});
   }
 
@@ -158,12 +178,20 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
   std::string limit_of = "every machine's maximum";
   const auto m = job.machine_id().empty() ? std::nullopt : store.machine(job.machine_id());
   if (!job.machine_id().empty()) {
-    if (!m) {
-      errors.push_back({"job.machine_id",
-                        detail::unknown_ref("machine", job.machine_id(),
-                                            known("SELECT id FROM machines ORDER BY id")),
-                        "use one of the known machine ids, or leave machine_id out for any "
-                        "capable machine"});
+    if (m && m->retired_at_ms != 0) {
+      errors.push_back({"job.machine_id", "machine '" + m->id + "' is retired",
+                        "use one of: " +
+                            list(known("SELECT id FROM machines WHERE retired_at_ms "
+                                       "IS NULL ORDER BY id")) +
+                            ", or leave machine_id out for any capable machine"});
+    } else if (!m) {
+      errors.push_back(
+          {"job.machine_id",
+           detail::unknown_ref(
+               "machine", job.machine_id(),
+               known("SELECT id FROM machines WHERE retired_at_ms IS NULL ORDER BY id")),
+           "use one of the known machine ids, or leave machine_id out for any "
+           "capable machine"});
     }
   }
   if (m) {
@@ -172,6 +200,7 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
     limit_of = m->id + "'s maximum";
   } else {
     for (const auto& each : store.machines()) {
+      if (each.retired_at_ms != 0) continue;
       max_feed = std::max(max_feed, each.max_feedrate_mm_s);
       max_rpm = std::max(max_rpm, each.max_spindle_rpm);
     }

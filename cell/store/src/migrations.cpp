@@ -131,6 +131,38 @@ CREATE TABLE job_plan_models (
 -- and is not used for SMC I until it is validated again.
 ALTER TABLE process_models ADD COLUMN suspect_reason TEXT NOT NULL DEFAULT '';
 )sql"},
+    Migration{
+        3, "catalog documents: machine speed range and drive, retirement, model validity, history",
+        R"sql(
+ALTER TABLE machines ADD COLUMN min_spindle_rpm REAL NOT NULL DEFAULT 0;
+ALTER TABLE machines ADD COLUMN drive TEXT NOT NULL DEFAULT 'simulated';
+-- retired_at_ms: NULL = in use. Nothing a job used is ever deleted; retired
+-- entities stay for the record and are refused by new jobs.
+ALTER TABLE machines ADD COLUMN retired_at_ms INTEGER;
+ALTER TABLE tools ADD COLUMN retired_at_ms INTEGER;
+ALTER TABLE materials ADD COLUMN retired_at_ms INTEGER;
+ALTER TABLE parts ADD COLUMN retired_at_ms INTEGER;
+ALTER TABLE process_models ADD COLUMN retired_at_ms INTEGER;
+-- smc.config.ValidityRange; NULL = valid everywhere.
+ALTER TABLE process_models ADD COLUMN validity BLOB;
+
+-- Every change to the catalog: what, when, by whom and why (append-only).
+CREATE TABLE catalog_history (
+  seq       INTEGER PRIMARY KEY AUTOINCREMENT,
+  time_ms   INTEGER NOT NULL,
+  author    TEXT NOT NULL,
+  kind      TEXT NOT NULL CHECK (kind IN ('machine', 'tool', 'material', 'part', 'model')),
+  entity_id TEXT NOT NULL,
+  action    TEXT NOT NULL,
+  reason    TEXT NOT NULL,
+  detail    TEXT NOT NULL DEFAULT ''
+);
+CREATE INDEX catalog_history_by_entity ON catalog_history (kind, entity_id, seq);
+CREATE TRIGGER catalog_history_append_only_update BEFORE UPDATE ON catalog_history
+BEGIN SELECT RAISE(ABORT, 'catalog_history is append-only'); END;
+CREATE TRIGGER catalog_history_append_only_delete BEFORE DELETE ON catalog_history
+BEGIN SELECT RAISE(ABORT, 'catalog_history is append-only'); END;
+)sql"},
 };
 
 }  // namespace

@@ -57,7 +57,8 @@ void add_hal(CLI::App& app) {
       x_min = std::min(x_min, r.x_mm);
       x_max = std::max(x_max, r.x_mm);
     }
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const bool complete = static_cast<long>(s->records()) >= args->count;
     std::printf(
         "{\"records\": %llu, \"lost\": %llu, \"repeated\": %llu, \"overruns\": %d, "

@@ -49,7 +49,7 @@ void bench_planning(int plans) {
       std::filesystem::temp_directory_path() / ("smc-bench-plan-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   auto db = store::Store::open((dir / "cell.db").string());
-  store::seed_demo(db, {store::default_models_dir()});
+  store::seed_demo(db);
   smc::config::SupervisorConfig defaults;
   smc::documents::load(src("cell/configs/defaults.textproto"), defaults);
   smc::cell::Planner planner(src("cell/grafcets"), defaults);
@@ -171,7 +171,7 @@ void bench_stream(int n, double window_s) {
   const std::string db_path = (dir / "cell.db").string();
   {
     auto db = store::Store::open(db_path);
-    store::seed_demo(db, {store::default_models_dir()});
+    store::seed_demo(db);
     const auto proto = *db.machine("mill-1");
     for (int i = 3; i <= n; ++i) {
       store::Machine m = proto;

@@ -34,7 +34,7 @@ class CellChoices : public ::testing::Test {
     dir_ = std::filesystem::temp_directory_path() / ("smc-choices-" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir_);
     db_ = new store::Store(store::Store::open((dir_ / "cell.db").string()));
-    store::seed_demo(*db_, {store::default_models_dir()});
+    store::seed_demo(*db_);
     cfg::SupervisorConfig defaults;
     smc::documents::load(src("cell/configs/defaults.textproto"), defaults);
     planner_ = new cell::Planner(src("cell/grafcets"), defaults);
@@ -229,6 +229,31 @@ TEST(Binding, AJobThatNamesAMachineWithoutModelsIsSmcIIThere) {
   EXPECT_NE(sel.explanation.find("SMC II on mill-1"), std::string::npos) << sel.explanation;
 }
 
+// A model is used only inside its validity range; the explanation says why
+// not.
+TEST(Selection, AModelOutsideItsValidityRangeIsNotUsed) {
+  cell::PlanInputs in;
+  in.machine = mill("mill-1");
+  in.job.spec.set_spindle_rpm(3000);
+  in.part.width_mm = 48;
+  in.models = {model(store::ModelKind::kForceProcess, true, "model-1"),
+               model(store::ModelKind::kMilling, true, "model-2")};
+  in.models[1].validity.set_max_spindle_rpm(2000);
+  auto sel = cell::select_variant(in);
+  EXPECT_EQ(sel.variant, cfg::SMC_II);
+  EXPECT_NE(sel.explanation.find("model-2 is outside its validity range (valid up to 2000 rpm, "
+                                 "the job runs at 3000)"),
+            std::string::npos)
+      << sel.explanation;
+  in.job.spec.set_spindle_rpm(1500);
+  EXPECT_EQ(cell::select_variant(in).variant, cfg::SMC_I);
+  in.models[0].validity.set_min_width_mm(50);
+  sel = cell::select_variant(in);
+  EXPECT_EQ(sel.variant, cfg::SMC_II);
+  EXPECT_NE(sel.explanation.find("valid from 50 mm wide, the part is 48"), std::string::npos)
+      << sel.explanation;
+}
+
 // ---- planning
 
 // SMC I: each pass's F_ref is planned from the models so that the planned
@@ -294,6 +319,17 @@ TEST_F(CellChoices, TransferLinePartIsPlannedAsTwoEqualChatterFreePasses) {
   EXPECT_TRUE(plan.config.has_force_model());
   EXPECT_NEAR(plan.config.operation().slow_period_s(), 0.04, 1e-12);  // one revolution
   EXPECT_NE(plan.config.explanation().find("2 equal passes of 1 mm"), std::string::npos)
+      << plan.config.explanation();
+}
+
+TEST_F(CellChoices, NoPassIsDeeperThanTheModelsAreValidFor) {
+  auto in = inputs("bracket-tl");
+  for (auto& m : in.models) {
+    if (m.kind == store::ModelKind::kForceProcess) m.validity.set_max_depth_mm(0.5);
+  }
+  const auto plan = planner_->plan(in, cell::select_variant(in));
+  EXPECT_EQ(plan.config.program().passes_size(), 4) << plan.config.explanation();
+  EXPECT_NE(plan.config.explanation().find("Passes no deeper than 0.5 mm"), std::string::npos)
       << plan.config.explanation();
 }
 

@@ -54,7 +54,7 @@ TEST(Limits, JobsAroundEveryLimitAreAcceptedAndCarriedOrRefusedWithReasons) {
       std::filesystem::temp_directory_path() / ("smc-limits-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   auto db = store::Store::open((dir / "cell.db").string());
-  store::seed_demo(db, {store::default_models_dir()});
+  store::seed_demo(db);
   cfg::SupervisorConfig defaults;
   smc::documents::load(src("cell/configs/defaults.textproto"), defaults);
   const cell::Planner planner(src("cell/grafcets"), defaults);

@@ -23,7 +23,7 @@ TEST(CellService, ASecondServiceOnTheSameDatabaseRefusesToStartWithTheHoldersPid
   const std::string db = (dir / "cell.db").string();
   {
     auto s = store::Store::open(db);
-    store::seed_demo(s, {store::default_models_dir()});
+    store::seed_demo(s);
   }
   smc::cell::ServiceOptions opt;
   opt.db_path = db;

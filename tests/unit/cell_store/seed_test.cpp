@@ -6,6 +6,7 @@
 
 #include <filesystem>
 
+#include "smc/cell/store/catalog_docs.hpp"
 #include "smc/documents/load.hpp"
 #include "store_test_util.hpp"
 
@@ -21,7 +22,7 @@ TEST_F(CellStoreSeed, IsIdempotent) {
   EXPECT_GT(seed_demo(s), 0);
   const Counts first = s.counts();
   EXPECT_EQ(seed_demo(s), 0);
-  EXPECT_EQ(seed_demo(s, SeedOptions{default_models_dir()}), 0);
+  EXPECT_EQ(seed_demo(s, SeedOptions{default_catalog_dir()}), 0);
   const Counts again = s.counts();
   EXPECT_EQ(first.machines, 2);
   EXPECT_EQ(first.tools, 1);
@@ -95,78 +96,56 @@ TEST_F(CellStoreSeed, TransferLinePartHasValidatedModelsJobShopPartNone) {
   EXPECT_TRUE(s.find_models("", "", "", "housing-js").empty());
 }
 
-TEST_F(CellStoreSeed, ReadsTheRepositoryModelsWhenPresent) {
-  // Whatever cell/models/ holds (or not), the seed accepts it and the models
-  // are the paper's: the same cutter and eq. (1).
-  Store s = Store::open(db_path());
-  seed_demo(s, SeedOptions{default_models_dir()});
+TEST_F(CellStoreSeed, ModelsAreTheRepositoryDocuments) {
+  // cell/catalog/models.textproto names cell/models/ for the documents: the
+  // seeded models are those files, and the cutter matches the tool.
+  Store s = seeded();
+  smc::config::ForceProcessModel force;
+  smc::documents::load(repo_file("cell/models/paper_force_model.textproto"), force);
+  smc::config::MillingModel milling;
+  smc::documents::load(repo_file("cell/models/paper_face_mill.textproto"), milling);
   const auto models = s.find_models("mill-1", "", "", "bracket-tl");
   ASSERT_EQ(models.size(), 2u);
   for (const auto& m : models) {
+    EXPECT_TRUE(m.validated) << m.id;
     if (m.kind == ModelKind::kForceProcess) {
-      EXPECT_NEAR(m.force.k_kn(), 0.76, 1e-12);
+      EXPECT_DOUBLE_EQ(m.force.k_kn(), force.k_kn());
+      EXPECT_DOUBLE_EQ(m.force.alpha(), force.alpha());
     } else {
       EXPECT_EQ(m.milling.cutter().teeth(), 4u);
       EXPECT_DOUBLE_EQ(s.tool("fm-r25-4t")->lead_angle_deg, m.milling.cutter().lead_angle_deg());
+      google::protobuf::util::MessageDifferencer d;
+      smc::config::MillingModel a = m.milling, b = milling;
+      for (auto* x : {&a, &b}) {
+        x->clear_provenance();
+        x->clear_validated();
+      }
+      EXPECT_TRUE(d.Compare(a, b));
     }
+  }
+  // Every seeded entity has its history row, by "seed".
+  const auto h = s.history();
+  EXPECT_EQ(h.size(), 10u);  // 2 machines, 1 tool, 1 material, 2 parts, 4 models
+  for (const auto& e : h) {
+    EXPECT_EQ(e.author, "seed");
+    EXPECT_EQ(e.action, "created");
   }
 }
 
-TEST_F(CellStoreSeed, MalformedModelDocumentStopsTheSeedBeforeAnyWrite) {
-  write("paper_face_mill.textproto", "name: \"x\"\ncutter { teeth: four }\n");
+TEST_F(CellStoreSeed, MalformedCatalogDocumentStopsTheSeedBeforeAnyWrite) {
+  for (const auto& f : std::filesystem::directory_iterator(default_catalog_dir())) {
+    std::filesystem::copy_file(f.path(), dir_ / f.path().filename());
+  }
+  write("tools.textproto", "tools {\n  id: \"t\"\n  teeth: four\n}\n");
   Store s = Store::open(db_path());
   try {
     seed_demo(s, SeedOptions{dir_.string()});
     FAIL();
-  } catch (const smc::documents::DocumentError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("paper_face_mill.textproto:2:"));
+  } catch (const CatalogError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("tools.textproto:3:"));
   }
   const Counts c = s.counts();
   EXPECT_EQ(c.machines + c.tools + c.materials + c.parts + c.models, 0);
-}
-
-TEST_F(CellStoreSeed, ModelDocumentsFromAFolderAreUsed) {
-  write("paper_force_model.textproto", "k_kn: 0.8 beta: 0.6 alpha: 0.6\n");
-  Store s = Store::open(db_path());
-  seed_demo(s, SeedOptions{dir_.string()});
-  const auto m = s.model("bracket-tl.mill-1.force");
-  ASSERT_TRUE(m);
-  EXPECT_DOUBLE_EQ(m->force.k_kn(), 0.8);
-  EXPECT_THAT(m->note, HasSubstr("paper_force_model.textproto"));
-  // No paper_face_mill.textproto there: the built-in appendix values.
-  const auto mm = s.model("bracket-tl.mill-1.milling");
-  ASSERT_TRUE(mm);
-  EXPECT_THAT(mm->note, HasSubstr("built-in"));
-}
-
-TEST_F(CellStoreSeed, BuiltInValuesEqualTheRepositoryDocuments) {
-  // The built-in fallback (used where cell/models/ is not installed) must be
-  // the same data as the documents; change both together.
-  const auto dir = default_models_dir();
-  // The documents ship with the repository: their absence is a defect.
-  ASSERT_TRUE(std::filesystem::exists(dir + "/paper_face_mill.textproto"))
-      << "no " << dir << "/paper_face_mill.textproto";
-  Store builtin = seeded();
-  const std::string other = (dir_ / "repo.db").string();
-  Store repo = Store::open(other);
-  seed_demo(repo, SeedOptions{dir});
-  for (const char* id : {"bracket-tl.mill-1.milling", "bracket-tl.mill-1.force"}) {
-    const auto a = builtin.model(id);
-    const auto b = repo.model(id);
-    ASSERT_TRUE(a && b) << id;
-    EXPECT_EQ(a->provenance, b->provenance) << id;
-    std::string diff;
-    google::protobuf::util::MessageDifferencer d;
-    d.ReportDifferencesToString(&diff);
-    if (a->kind == ModelKind::kMilling) {
-      EXPECT_TRUE(d.Compare(a->milling, b->milling)) << id << ":\n" << diff;
-    } else {
-      EXPECT_TRUE(d.Compare(a->force, b->force)) << id << ":\n" << diff;
-    }
-  }
-  EXPECT_DOUBLE_EQ(builtin.tool("fm-r25-4t")->lead_angle_deg,
-                   repo.tool("fm-r25-4t")->lead_angle_deg);
-  EXPECT_DOUBLE_EQ(builtin.part("bracket-tl")->length_mm, repo.part("bracket-tl")->length_mm);
 }
 
 }  // namespace

@@ -35,7 +35,8 @@ HalSampleStream::HalSampleStream(const std::string& component, int channel) : im
         "no sampler stream " + std::to_string(channel) + " with pins '" + kRecordTypes +
         "' (error " + std::to_string(-r) +
         "): load it in the servo thread as deploy/linuxcnc/smc-edge.hal does (loadrt sampler "
-        "cfg=" + kRecordTypes + ")");
+        "cfg=" +
+        kRecordTypes + ")");
   }
   impl_->attached = true;
   hal_ready(impl_->comp);

@@ -19,6 +19,9 @@ struct Machine {
   double max_spindle_power_w = 0;
   double max_feedrate_mm_s = 0;
   double max_spindle_rpm = 0;
+  double min_spindle_rpm = 0;
+  std::string drive = "simulated";  // or "linuxcnc"
+  std::int64_t retired_at_ms = 0;   // 0: in use
 };
 
 struct Tool {
@@ -27,11 +30,13 @@ struct Tool {
   std::uint32_t teeth = 0;
   double radius_mm = 0;
   double lead_angle_deg = 0;
+  std::int64_t retired_at_ms = 0;  // 0: in use
 };
 
 struct Material {
   std::string id;  // "6061-T6"
   std::string name;
+  std::int64_t retired_at_ms = 0;  // 0: in use
 };
 
 // A part and the defaults of its part program. Geometry follows
@@ -45,9 +50,10 @@ struct Part {
   double width_mm = 0;
   double offset_mm = 0;
   double length_mm = 0;
-  double total_depth_mm = 0;  // depth its program removes
-  double feedrate_mm_s = 0;   // programmed feedrate
-  double spindle_rpm = 0;     // programmed spindle speed
+  double total_depth_mm = 0;       // depth its program removes
+  double feedrate_mm_s = 0;        // programmed feedrate
+  double spindle_rpm = 0;          // programmed spindle speed
+  std::int64_t retired_at_ms = 0;  // 0: in use
 };
 
 enum class ModelKind : std::uint8_t {
@@ -77,6 +83,20 @@ struct ProcessModel {
   // A suspect model is listed but not used for SMC I (Store::mark_model_suspect;
   // set_model_validated(id, true) clears it).
   std::string suspect_reason;
+  smc::config::ValidityRange validity;  // all 0: valid everywhere
+  std::int64_t retired_at_ms = 0;       // 0: in use
+};
+
+// One change to the catalog (Store::history).
+struct CatalogEvent {
+  std::int64_t seq = 0;
+  std::int64_t time_ms = 0;
+  std::string author;
+  std::string kind;  // machine, tool, material, part, model
+  std::string entity_id;
+  std::string action;  // created, updated, retired, validated, suspected
+  std::string reason;
+  std::string detail;  // what changed, in words
 };
 
 struct Job {
@@ -114,7 +134,8 @@ struct JobEvent {
 // The job state machine (README.md):
 //   queued → planned → assigned → running → done | failed | interrupted
 //   assigned → interrupted, interrupted → queued (re-queue),
-//   interrupted → failed (given up), queued | planned → failed (cannot be planned).
+//   interrupted → failed (given up), queued | planned → failed (cannot be planned),
+//   planned → queued (re-planned: its machine's limits changed).
 bool allowed_transition(smc::config::JobState from, smc::config::JobState to) noexcept;
 bool is_terminal(smc::config::JobState s) noexcept;  // done, failed
 

@@ -127,13 +127,30 @@ class Store {
   // planned from it chattered). A suspect model is not used for SMC I.
   void mark_model_suspect(const std::string& id, const std::string& reason);
   // Every model for the combination, so the cell can explain its choice.
-  // An empty machine_id, tool_id or material_id matches any; a part_id
+  // Retired models are left out. An empty machine_id, tool_id or material_id matches any; a part_id
   // matches models for that part and models for any part (part_id empty in
   // the row); an empty part_id matches every model. Order: part-specific
   // first, then validated, then provenance (identified, fitted, handbook),
   // then newest first.
   std::vector<ProcessModel> find_models(const std::string& machine_id, const std::string& tool_id,
                                         const std::string& material_id, const std::string& part_id);
+
+  // ------------------------------------------------------------- history --
+  // Appends one change to the catalog's history (in the caller's
+  // transaction when there is one). An empty author is recorded as "unknown".
+  void record_catalog_event(const std::string& kind, const std::string& entity_id,
+                            const std::string& action, const std::string& author,
+                            const std::string& reason, const std::string& detail = {});
+  // The history of one entity (or of a kind, or of everything, with empty
+  // arguments), oldest first.
+  std::vector<CatalogEvent> history(const std::string& kind = {},
+                                    const std::string& entity_id = {});
+  // Retires a machine, tool, material, part or model (kind as in the
+  // history): it stays in the database for the jobs that used it, and new
+  // jobs and plans refuse it. Recorded in the history. StoreError for an
+  // unknown kind or id, one retired already, or an empty reason.
+  void retire(const std::string& kind, const std::string& id, const std::string& author,
+              const std::string& reason);
 
   // ---------------------------------------------------------------- jobs --
   // Checks a job against the catalog without writing; every problem found.

@@ -1,0 +1,213 @@
+// Catalog documents: apply (checked as a whole, idempotent, recorded),
+// export and the round trip, bad documents refused naming file, field and
+// fix with nothing written, retirement.
+
+#include <gmock/gmock.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "smc/cell/store/catalog_docs.hpp"
+#include "smc/cell/store/job_file.hpp"
+#include "store_test_util.hpp"
+
+namespace smc::cell::store::test {
+namespace {
+
+using ::testing::HasSubstr;
+
+class CellCatalog : public StoreTest {
+ protected:
+  std::string doc(const std::string& name, const std::string& text) {
+    const auto p = dir_ / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  // Applies `text` (one document) to a seeded database and returns the
+  // error; the database must be as before.
+  std::string refused(const std::string& text) {
+    Store s = seeded();
+    const Counts before = s.counts();
+    const auto hist = s.history().size();
+    const std::string file = doc("bad.textproto", text);
+    try {
+      apply_catalog(s, load_catalog({file}), {});
+      ADD_FAILURE() << "applied: " << text;
+      return {};
+    } catch (const CatalogError& e) {
+      const Counts after = s.counts();
+      EXPECT_EQ(after.machines, before.machines);
+      EXPECT_EQ(after.parts, before.parts);
+      EXPECT_EQ(after.models, before.models);
+      EXPECT_EQ(s.history().size(), hist) << "nothing written";
+      return e.what();
+    }
+  }
+};
+
+std::string read_all(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST_F(CellCatalog, TheShippedCatalogRoundTripsThroughExport) {
+  Store a = Store::open((dir_ / "a.db").string());
+  const auto created = apply_catalog(a, load_catalog({default_catalog_dir()}), {});
+  EXPECT_EQ(created.size(), 10u);
+  write_catalog(export_catalog(a), (dir_ / "export-a").string());
+  Store b = Store::open((dir_ / "b.db").string());
+  apply_catalog(b, load_catalog({(dir_ / "export-a").string()}), {.author = "t"});
+  write_catalog(export_catalog(b), (dir_ / "export-b").string());
+  for (const char* f : {"machines.textproto", "tools.textproto", "materials.textproto",
+                        "parts.textproto", "models.textproto"}) {
+    const auto x = read_all(dir_ / "export-a" / f);
+    EXPECT_FALSE(x.empty()) << f;
+    EXPECT_EQ(x, read_all(dir_ / "export-b" / f)) << f;
+  }
+}
+
+TEST_F(CellCatalog, ApplyIsIdempotentShowsItsChangesAndRecordsThem) {
+  Store s = seeded();
+  const std::string file = doc("m.textproto",
+                               "machines { id: \"mill-1\" name: \"face mill mill-1 (the paper's "
+                               "machine)\" max_spindle_power_w: 900 max_feedrate_mm_s: 36 "
+                               "max_spindle_rpm: 3000 }\n"
+                               "machines { id: \"mill-3\" max_spindle_power_w: 2000 "
+                               "max_feedrate_mm_s: 50 min_spindle_rpm: 200 max_spindle_rpm: 6000 "
+                               "drive: \"linuxcnc\" }\n");
+  const auto dry = apply_catalog(s, load_catalog({file}), {.dry_run = true});
+  ASSERT_EQ(dry.size(), 2u);
+  EXPECT_EQ(dry[0].action, "updated");
+  EXPECT_THAT(dry[0].detail, HasSubstr("max_spindle_power_w"));
+  EXPECT_EQ(dry[1].action, "created");
+  EXPECT_DOUBLE_EQ(s.machine("mill-1")->max_spindle_power_w, 745.7) << "a dry run writes nothing";
+  EXPECT_FALSE(s.machine("mill-3"));
+  apply_catalog(s, load_catalog({file}), {.author = "ana", .reason = "new spindle"});
+  EXPECT_DOUBLE_EQ(s.machine("mill-1")->max_spindle_power_w, 900);
+  const auto m3 = s.machine("mill-3");
+  ASSERT_TRUE(m3);
+  EXPECT_EQ(m3->drive, "linuxcnc");
+  EXPECT_DOUBLE_EQ(m3->min_spindle_rpm, 200);
+  EXPECT_EQ(m3->name, "mill-3");
+  const auto h = s.history("machine", "mill-1");
+  ASSERT_FALSE(h.empty());
+  EXPECT_EQ(h.back().action, "updated");
+  EXPECT_EQ(h.back().author, "ana");
+  EXPECT_EQ(h.back().reason, "new spindle");
+  EXPECT_THAT(h.back().detail, HasSubstr("max_spindle_power_w"));
+  const auto again = apply_catalog(s, load_catalog({file}), {});
+  for (const auto& c : again) EXPECT_EQ(c.action, "unchanged") << c.kind << " " << c.id;
+  EXPECT_EQ(s.history("machine", "mill-1").size(), h.size());
+}
+
+// One document per kind with each class of error.
+TEST_F(CellCatalog, BadDocumentsAreRefusedNamingFileFieldAndFix) {
+  // Wrong type (a parse error: file:line:col).
+  EXPECT_THAT(refused("machines { id: \"m\" max_spindle_power_w: \"lots\" }\n"),
+              HasSubstr("bad.textproto:1:"));
+  // Missing field.
+  EXPECT_THAT(refused("tools { name: \"no id\" teeth: 4 radius_mm: 10 }\n"),
+              HasSubstr("bad.textproto: tools[0] ''.id: missing"));
+  // Out-of-range limits.
+  const auto limits = refused(
+      "machines { id: \"m9\" max_spindle_power_w: -5 max_feedrate_mm_s: 30 max_spindle_rpm: 100 "
+      "min_spindle_rpm: 200 }\n");
+  EXPECT_THAT(limits, HasSubstr("machines[0] 'm9'.max_spindle_power_w: must be > 0, got -5"));
+  EXPECT_THAT(limits, HasSubstr("min_spindle_rpm: must be >= 0 and below max_spindle_rpm"));
+  EXPECT_THAT(limits, HasSubstr("fix:"));
+  EXPECT_THAT(refused("tools { id: \"t\" teeth: 0 radius_mm: 10 lead_angle_deg: 95 }\n"),
+              HasSubstr("tools[0] 't'.lead_angle_deg: must be in [0, 90)"));
+  // Unknown reference.
+  const auto part = refused(
+      "parts { id: \"p\" material_id: \"unobtainium\" tool_id: \"fm-r25-4t\" width_mm: 10 "
+      "length_mm: 10 total_depth_mm: 1 feedrate_mm_s: 5 spindle_rpm: 1000 }\n");
+  EXPECT_THAT(part, HasSubstr("parts[0] 'p'.material_id: unknown material 'unobtainium'"));
+  EXPECT_THAT(part, HasSubstr("use one of: 6061-T6"));
+  EXPECT_THAT(refused("models { id: \"x\" machine_id: \"mill-9\" tool_id: \"fm-r25-4t\" "
+                      "material_id: \"6061-T6\" force_process { k_kn: 1 beta: 0.6 alpha: 0.6 } "
+                      "}\n"),
+              HasSubstr("models[0] 'x'.machine_id: unknown machine 'mill-9'"));
+  EXPECT_THAT(refused("materials { id: \"steel\" }\nmaterials { id: \"steel\" }\n"),
+              HasSubstr("the id is given twice"));
+  // Duplicate id of an existing model with another document.
+  EXPECT_THAT(refused("models { id: \"bracket-tl.mill-1.force\" machine_id: \"mill-1\" tool_id: "
+                      "\"fm-r25-4t\" material_id: \"6061-T6\" part_id: \"bracket-tl\" "
+                      "force_process { k_kn: 2 beta: 0.65 alpha: 0.63 } validated: true }\n"),
+              HasSubstr("models are never replaced"));
+  // A model with no document, and a bad milling model.
+  EXPECT_THAT(refused("models { id: \"y\" machine_id: \"mill-1\" tool_id: \"fm-r25-4t\" "
+                      "material_id: \"6061-T6\" }\n"),
+              HasSubstr("has no model document"));
+}
+
+TEST_F(CellCatalog, RetiredEntitiesStayButNewJobsRefuseThem) {
+  Store s = seeded();
+  s.retire("part", "housing-js", "ana", "superseded by housing-js2");
+  EXPECT_TRUE(s.part("housing-js"));
+  EXPECT_NE(s.part("housing-js")->retired_at_ms, 0);
+  smc::config::Job j;
+  j.set_part_id("housing-js");
+  try {
+    (void)s.submit_job(j);
+    FAIL() << "a retired part was accepted";
+  } catch (const JobRejected& e) {
+    EXPECT_THAT(e.what(), HasSubstr("part 'housing-js' is retired"));
+    EXPECT_THAT(e.what(), HasSubstr("use one of: bracket-tl"));
+  }
+  s.retire("machine", "mill-2", "ana", "sold");
+  smc::config::Job pinned;
+  pinned.set_part_id("bracket-tl");
+  pinned.set_machine_id("mill-2");
+  EXPECT_THROW((void)s.submit_job(pinned), JobRejected);
+  EXPECT_THROW(s.retire("machine", "mill-2", "ana", "again"), StoreError);
+  EXPECT_THROW(s.retire("machine", "mill-9", "ana", "x"), StoreError);
+  EXPECT_THROW(s.retire("machine", "mill-1", "ana", ""), StoreError);
+  // Retired models are not found for planning; the export leaves retired
+  // entities out; a retired id is never reused.
+  s.retire("model", "bracket-tl.mill-1.force", "ana", "re-identified");
+  for (const auto& m : s.find_models("mill-1", "", "", "bracket-tl")) {
+    EXPECT_NE(m.id, "bracket-tl.mill-1.force");
+  }
+  const auto exported = export_catalog(s);
+  for (const auto& m : exported.machines()) EXPECT_NE(m.id(), "mill-2");
+  const std::string file = doc("again.textproto",
+                               "machines { id: \"mill-2\" max_spindle_power_w: 745.7 "
+                               "max_feedrate_mm_s: 36 max_spindle_rpm: 3000 }\n");
+  try {
+    apply_catalog(s, load_catalog({file}), {});
+    FAIL();
+  } catch (const CatalogError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("'mill-2' is retired; ids are never reused"));
+  }
+  const auto h = s.history("part", "housing-js");
+  ASSERT_FALSE(h.empty());
+  EXPECT_EQ(h.back().action, "retired");
+  EXPECT_EQ(h.back().reason, "superseded by housing-js2");
+}
+
+// Changing a machine's limits sends the jobs planned for it back to be
+// planned again; jobs planned for another machine stay planned.
+TEST_F(CellCatalog, ChangingAMachinesLimitsReplansItsPlannedJobs) {
+  Store s = seeded();
+  const auto plan_for = [&](const std::string& machine) {
+    smc::config::Job j;
+    j.set_part_id("bracket-tl");
+    const auto job = s.submit_job(j);
+    s.set_plan(job.id, smc::config::SMC_I, "why", {}, machine);
+    EXPECT_TRUE(s.transition(job.id, smc::config::JOB_QUEUED, smc::config::JOB_PLANNED, "p"));
+    return job.id;
+  };
+  const auto on1 = plan_for("mill-1");
+  const auto on2 = plan_for("mill-2");
+  const std::string file = doc("m.textproto",
+                               "machines { id: \"mill-1\" name: \"face mill mill-1 (the paper's "
+                               "machine)\" max_spindle_power_w: 600 max_feedrate_mm_s: 36 "
+                               "max_spindle_rpm: 3000 }\n");
+  apply_catalog(s, load_catalog({file}), {.author = "ana", .reason = "spindle derated"});
+  EXPECT_EQ(s.job(on1)->state, smc::config::JOB_QUEUED);
+  EXPECT_THAT(s.events(on1).back().reason, HasSubstr("re-planned: machine mill-1 changed"));
+  EXPECT_EQ(s.job(on2)->state, smc::config::JOB_PLANNED);
+}
+
+}  // namespace
+}  // namespace smc::cell::store::test
