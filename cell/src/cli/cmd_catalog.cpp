@@ -2,12 +2,13 @@
 // validate|suspect: the shop's own machines, tools, materials, parts and
 // models, from documents (cell/store/README.md, "Catalog documents").
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "registry.hpp"
@@ -41,8 +42,8 @@ void print_history(store::Store& s, const std::string& kind, const std::string& 
   if (h.empty()) std::printf("    (none recorded)\n");
   for (const auto& e : h) {
     std::printf("    %s  %-9s by %s: %s%s%s\n", store::format_time(e.time_ms).c_str(),
-                e.action.c_str(), e.author.c_str(), e.reason.c_str(),
-                e.detail.empty() ? "" : " — ", e.detail.c_str());
+                e.action.c_str(), e.author.c_str(), e.reason.c_str(), e.detail.empty() ? "" : " — ",
+                e.detail.c_str());
   }
 }
 
@@ -132,7 +133,8 @@ SMC_CELL_COMMAND(catalog, 22) {
                   (c.kind + " " + c.id).c_str(), c.detail.empty() ? "" : ": ", c.detail.c_str());
     }
     std::printf("%d change%s%s, %zu unchanged\n", n, n == 1 ? "" : "s",
-                a->dry_run ? " (dry run: nothing written)" : "", changes.size() - static_cast<size_t>(n));
+                a->dry_run ? " (dry run: nothing written)" : "",
+                changes.size() - static_cast<size_t>(n));
   });
 
   struct ExportArgs {
@@ -194,8 +196,8 @@ SMC_CELL_COMMAND(catalog, 22) {
       for (const auto& p : s.parts()) {
         if (p.retired_at_ms != 0 && !l->retired) continue;
         std::printf("part     %-16s %s, tool %s, %g x %g mm, %g mm at %g mm/s, %g rpm  %s%s\n",
-                    p.id.c_str(), p.material_id.c_str(), p.tool_id.c_str(), p.width_mm,
-                    p.length_mm, p.total_depth_mm, p.feedrate_mm_s, p.spindle_rpm, p.name.c_str(),
+                    p.id.c_str(), p.material_id.c_str(), p.tool_id.c_str(), p.width_mm, p.length_mm,
+                    p.total_depth_mm, p.feedrate_mm_s, p.spindle_rpm, p.name.c_str(),
                     mark(p.retired_at_ms));
       }
     }

@@ -3,13 +3,13 @@
 #include <google/protobuf/util/message_differencer.h>
 
 #include <algorithm>
-#include <cstdio>
-#include <type_traits>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
+#include <type_traits>
 
 #include "smc/documents/load.hpp"
 #include "smc/machining/model_proto.hpp"
@@ -61,8 +61,14 @@ cfg::CatalogMachine normal(cfg::CatalogMachine d) {
   return d;
 }
 Machine to_row(const cfg::CatalogMachine& d) {
-  return Machine{d.id(), d.name(), d.max_spindle_power_w(), d.max_feedrate_mm_s(),
-                 d.max_spindle_rpm(), d.min_spindle_rpm(), d.drive(), 0};
+  return Machine{d.id(),
+                 d.name(),
+                 d.max_spindle_power_w(),
+                 d.max_feedrate_mm_s(),
+                 d.max_spindle_rpm(),
+                 d.min_spindle_rpm(),
+                 d.drive(),
+                 0};
 }
 
 cfg::CatalogTool to_doc(const Tool& t) {
@@ -113,9 +119,17 @@ cfg::CatalogPart normal(cfg::CatalogPart d) {
   return d;
 }
 Part to_row(const cfg::CatalogPart& d) {
-  return Part{d.id(),          d.name(),           d.material_id(),    d.tool_id(),
-              d.width_mm(),    d.offset_mm(),      d.length_mm(),      d.total_depth_mm(),
-              d.feedrate_mm_s(), d.spindle_rpm(), 0};
+  return Part{d.id(),
+              d.name(),
+              d.material_id(),
+              d.tool_id(),
+              d.width_mm(),
+              d.offset_mm(),
+              d.length_mm(),
+              d.total_depth_mm(),
+              d.feedrate_mm_s(),
+              d.spindle_rpm(),
+              0};
 }
 
 cfg::CatalogModel to_doc(const ProcessModel& m) {
@@ -206,7 +220,8 @@ void read_one(const fs::path& path, CatalogDocuments& out, common::Diagnostics& 
   const fs::path dir = path.parent_path();
   int i = 0;
   for (auto& m : *c.mutable_models()) {
-    const std::string where = path.string() + ": models[" + std::to_string(i++) + "] '" + m.id() + "'";
+    const std::string where =
+        path.string() + ": models[" + std::to_string(i++) + "] '" + m.id() + "'";
     try {
       if (!m.milling_file().empty()) {
         const auto f = (dir / m.milling_file()).lexically_normal().string();
@@ -362,7 +377,10 @@ std::vector<CatalogChange> apply_catalog(Store& store, const CatalogDocuments& d
                    "use \"simulated\" or \"linuxcnc\"");
     }
     const std::string diff = row ? difference(to_doc(*row), d) : "";
-    changes.push_back({"machine", d.id(), !row ? "created" : diff.empty() ? "unchanged" : "updated",
+    changes.push_back({"machine", d.id(),
+                       !row           ? "created"
+                       : diff.empty() ? "unchanged"
+                                      : "updated",
                        diff});
   }
   for (const auto& f : docs.tools) {
@@ -381,7 +399,10 @@ std::vector<CatalogChange> apply_catalog(Store& store, const CatalogDocuments& d
                    "give the lead angle in degrees (0: square shoulder)");
     }
     const std::string diff = row ? difference(to_doc(*row), d) : "";
-    changes.push_back({"tool", d.id(), !row ? "created" : diff.empty() ? "unchanged" : "updated",
+    changes.push_back({"tool", d.id(),
+                       !row           ? "created"
+                       : diff.empty() ? "unchanged"
+                                      : "updated",
                        diff});
   }
   for (const auto& f : docs.materials) {
@@ -391,7 +412,10 @@ std::vector<CatalogChange> apply_catalog(Store& store, const CatalogDocuments& d
     const auto d = normal(f.doc);
     const std::string diff = row ? difference(to_doc(*row), d) : "";
     changes.push_back({"material", d.id(),
-                       !row ? "created" : diff.empty() ? "unchanged" : "updated", diff});
+                       !row           ? "created"
+                       : diff.empty() ? "unchanged"
+                                      : "updated",
+                       diff});
   }
   for (const auto& f : docs.parts) {
     const std::string w = at(f, "parts");
@@ -399,10 +423,10 @@ std::vector<CatalogChange> apply_catalog(Store& store, const CatalogDocuments& d
     if (!check_id(w, f.doc.id(), 63, row ? row->retired_at_ms : 0)) continue;
     const auto d = normal(f.doc);
     if (!materials.count(d.material_id())) {
-      problems.add(w + ".material_id",
-                   d.material_id().empty() ? "missing"
-                                           : "unknown material '" + d.material_id() + "'",
-                   "use one of: " + list(materials));
+      problems.add(
+          w + ".material_id",
+          d.material_id().empty() ? "missing" : "unknown material '" + d.material_id() + "'",
+          "use one of: " + list(materials));
     }
     if (!d.tool_id().empty() && !tools.count(d.tool_id())) {
       problems.add(w + ".tool_id", "unknown tool '" + d.tool_id() + "'",
@@ -417,7 +441,10 @@ std::vector<CatalogChange> apply_catalog(Store& store, const CatalogDocuments& d
     positive(w, "feedrate_mm_s", d.feedrate_mm_s(), "mm/s");
     positive(w, "spindle_rpm", d.spindle_rpm(), "rev/min");
     const std::string diff = row ? difference(to_doc(*row), d) : "";
-    changes.push_back({"part", d.id(), !row ? "created" : diff.empty() ? "unchanged" : "updated",
+    changes.push_back({"part", d.id(),
+                       !row           ? "created"
+                       : diff.empty() ? "unchanged"
+                                      : "updated",
                        diff});
   }
   for (const auto& f : docs.models) {
@@ -442,10 +469,10 @@ std::vector<CatalogChange> apply_catalog(Store& store, const CatalogDocuments& d
                    "use one of: " + list(tools));
     }
     if (!materials.count(d.material_id())) {
-      problems.add(w + ".material_id",
-                   d.material_id().empty() ? "missing"
-                                           : "unknown material '" + d.material_id() + "'",
-                   "use one of: " + list(materials));
+      problems.add(
+          w + ".material_id",
+          d.material_id().empty() ? "missing" : "unknown material '" + d.material_id() + "'",
+          "use one of: " + list(materials));
     }
     if (!d.part_id().empty()) {
       const auto p = part_material.find(d.part_id());

@@ -40,7 +40,7 @@ struct CatalogDocuments {
 CatalogDocuments load_catalog(const std::vector<std::string>& paths);
 
 struct CatalogChange {
-  std::string kind;    // machine, tool, material, part, model
+  std::string kind;  // machine, tool, material, part, model
   std::string id;
   std::string action;  // created, updated, unchanged
   std::string detail;  // the fields that change, for an update
