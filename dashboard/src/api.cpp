@@ -234,6 +234,7 @@ void Api::handle(const HttpRequest& req, std::function<void(HttpResponse)> reply
     return simple_get(deps_.state.chatter_json(mill ? *mill : std::string()));
   }
   if (n == 2 && seg[1] == "commands") return simple_get(deps_.state.commands_json());
+  if (n == 2 && seg[1] == "catalog") return simple_get(deps_.state.catalog_json());
   if (n == 2 && seg[1] == "stats") return simple_get(deps_.stats ? deps_.stats() : "{}");
   if (n == 2 && seg[1] == "session") {
     if (!get) return reply(method_not_allowed("GET"));

@@ -269,6 +269,16 @@ std::vector<Event> CellState::on_job(const std::string& job_id, const config::Jo
   return events;
 }
 
+std::vector<Event> CellState::on_catalog(const config::CatalogView& view) {
+  std::vector<Event> events;
+  std::string doc = documents::to_json(view, false);
+  std::lock_guard lock(impl_->mu);
+  ++impl_->counters.samples;
+  impl_->catalog = doc;
+  events.push_back(make_event(EventKind::kCatalog, {}, doc));
+  return events;
+}
+
 std::vector<Event> CellState::on_command(const CommandRecord& record) {
   std::vector<Event> events;
   std::string json = to_json(record);

@@ -27,6 +27,7 @@ namespace smc::config {
 class SupervisorConfig;
 class PartProgram;
 class JobStatus;
+class CatalogView;
 }  // namespace smc::config
 
 namespace smc::dashboard {
@@ -62,6 +63,8 @@ class CellState {
   std::vector<Event> on_program(const std::string& machine_id, const config::PartProgram& p);
   std::vector<Event> on_job(const std::string& job_id, const config::JobStatus& j);
   std::vector<Event> on_command(const CommandRecord& record);
+  // The cell's catalog and its choice for each part (one document, the latest).
+  std::vector<Event> on_catalog(const config::CatalogView& view);
 
   // ---- reading (any thread): JSON documents of the REST API.
   bool has_mill(const std::string& machine_id) const;
@@ -74,6 +77,10 @@ class CellState {
   std::string jobs_json(const std::string& machine_id = {}) const;     // empty: all
   std::string chatter_json(const std::string& machine_id = {}) const;  // empty: all
   std::string commands_json() const;
+  // {"view": the CatalogView (null before the cell sent one), "mills": the
+  // live state of every mill seen}: machines with their live state, parts
+  // with their models and the SMC they would get and why.
+  std::string catalog_json() const;
   // Everything a page needs to start: {"mills": [...], "jobs": [...], "commands": [...]}.
   std::string cell_json() const;
 

@@ -155,6 +155,7 @@ struct CellState::Impl {
   std::map<std::string, Job> jobs;
   std::uint64_t job_order = 0;
   std::deque<std::string> commands;
+  std::string catalog;  // the latest CatalogView (Protobuf JSON mapping); empty: none yet
   Counters counters;
 
   // The mill, created (with a kMill event) on first sight; null past the limit.

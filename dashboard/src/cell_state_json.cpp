@@ -119,6 +119,21 @@ std::string CellState::chatter_json(const std::string& machine_id) const {
   return w.take();
 }
 
+std::string CellState::catalog_json() const {
+  JsonWriter w;
+  std::lock_guard lock(impl_->mu);
+  w.begin_object().key("view");
+  if (impl_->catalog.empty()) {
+    w.null();
+  } else {
+    w.raw(impl_->catalog);
+  }
+  w.key("mills").begin_array();
+  for (const auto& [id, m] : impl_->mills) impl_->write_mill(w, m, false);
+  w.end_array().end_object();
+  return w.take();
+}
+
 std::string CellState::commands_json() const {
   JsonWriter w;
   std::lock_guard lock(impl_->mu);

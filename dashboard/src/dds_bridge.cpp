@@ -73,6 +73,7 @@ struct DdsBridge::Impl {
         configs(participant),
         programs(participant),
         jobs(participant),
+        catalogs(participant),
         commands(command_topic),
         dispatcher(participant),
         next_command_id(unix_now_ns() / 1000) {
@@ -118,6 +119,11 @@ struct DdsBridge::Impl {
       jobs.take([&](const std::string& key,
                     const config::JobStatus& j) { publish(state.on_job(key, j)); },
                 on_reject);
+    });
+    dispatcher.on(catalogs.reader(), [this, on_reject] {
+      catalogs.take(
+          [&](const std::string&, const config::CatalogView& v) { publish(state.on_catalog(v)); },
+          on_reject);
     });
   }
 
@@ -220,6 +226,7 @@ struct DdsBridge::Impl {
   wire::DocumentSubscriber<config::SupervisorConfig> configs;
   wire::DocumentSubscriber<config::PartProgram> programs;
   wire::DocumentSubscriber<config::JobStatus> jobs;
+  wire::DocumentSubscriber<config::CatalogView> catalogs;
   tr::Writer<smc_data_OperatorCommand> commands;
   tr::Dispatcher dispatcher;
 

@@ -26,6 +26,8 @@ const char* to_string(EventKind kind) noexcept {
       return "command";
     case EventKind::kMill:
       return "mill";
+    case EventKind::kCatalog:
+      return "catalog";
   }
   return "unknown";
 }

@@ -21,6 +21,7 @@ enum class EventKind : std::uint8_t {
   kProgram,    // PartProgram document
   kCommand,    // an operator command this dashboard sent
   kMill,       // a mill seen for the first time
+  kCatalog,    // CatalogView document: the cell's catalog and its choices
 };
 
 const char* to_string(EventKind kind) noexcept;

@@ -144,6 +144,13 @@ async function main() {
 
     await page.goto(`${url}#/`);
     await page.waitForSelector('.mill-card[data-mill="mill-2"]', { timeout: 5000 });
+    // The cell's catalog, read-only: its machines with their edges, and what
+    // a job of each part would get and why.
+    await page.waitForFunction(() => {
+      const t = document.querySelector('#catalog')?.textContent ?? '';
+      return t.includes('mill-2') && t.includes('bracket-tl') && t.includes('housing-js') &&
+        t.includes('SMC II on any machine');
+    }, null, { timeout: 5000 });
     await page.screenshot({ path: join(ARTIFACTS, 'dashboard-cell.png'), fullPage: true });
 
     assert.deepEqual(pageErrors, [], 'no errors in the page');

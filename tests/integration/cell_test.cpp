@@ -20,6 +20,7 @@
 #include "smc/documents/load.hpp"
 #include "smc/transport/document.hpp"
 #include "smc/transport/participant.hpp"
+#include "smc/wire/documents.hpp"
 #include "smc/wire/topics.hpp"
 #include "smc_config.pb.h"
 
@@ -240,6 +241,29 @@ TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
   const auto j = *job(id);
   EXPECT_EQ(j.state, cfg::JOB_DONE);
   EXPECT_EQ(j.machine_id, "mill-3");
+  // Dashboards see the catalog with the new machine (smc_catalog, transient-local).
+  smc::transport::Participant p({.partition = partition_});
+  smc::wire::DocumentSubscriber<cfg::CatalogView> catalogs(p);
+  bool seen = false;
+  std::string choice;
+  const auto deadline = Clock::now() + 20s;
+  while (!seen && Clock::now() < deadline) {
+    catalogs.take(
+        [&](const std::string&, const cfg::CatalogView& v) {
+          for (const auto& m : v.catalog().machines()) seen = seen || m.id() == "mill-3";
+          for (const auto& c : v.parts()) {
+            if (c.part_id() == "bracket-tl") choice = c.explanation();
+          }
+        },
+        [](const smc::transport::EnvelopeRejection&) {});
+    if (!seen) std::this_thread::sleep_for(50ms);
+  }
+  EXPECT_TRUE(seen) << "the cell's catalog view names mill-3";
+  // Only mill-3's edge runs: the transfer-line part's models are on the
+  // others, so a job of it would run SMC II, each machine's reason given.
+  EXPECT_NE(choice.find("mill-1: has usable models but its edge is lost"), std::string::npos)
+      << choice;
+  EXPECT_NE(choice.find("mill-3: no validated models"), std::string::npos) << choice;
 }
 
 TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {

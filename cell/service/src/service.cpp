@@ -17,6 +17,7 @@
 #include "smc/cell/candidates.hpp"
 #include "smc/cell/dispatch.hpp"
 #include "smc/cell/planner.hpp"
+#include "smc/cell/store/catalog_docs.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/common/clock.hpp"
 #include "smc/documents/load.hpp"
@@ -105,6 +106,8 @@ struct CellService::Impl {
   smc::wire::DocumentPublisher<cfg::SupervisorConfig> config_writer;
   smc::wire::DocumentPublisher<cfg::JobAssignment> job_writer;
   smc::wire::DocumentPublisher<cfg::JobStatus> status_doc_writer;
+  smc::wire::DocumentPublisher<cfg::CatalogView> catalog_writer;
+  std::string catalog_sent;  // the last CatalogView published (serialized, without its time)
   tr::Topic<smc_data_EdgeStatus> edge_topic;
   tr::Reader<smc_data_EdgeStatus> edge_reader;
   tr::Topic<smc_data_JobProgress> progress_topic;
@@ -135,6 +138,7 @@ struct CellService::Impl {
         config_writer(participant),
         job_writer(participant),
         status_doc_writer(participant),
+        catalog_writer(participant),
         edge_topic(participant),
         edge_reader(edge_topic),
         progress_topic(participant),
@@ -152,6 +156,53 @@ struct CellService::Impl {
     dispatcher.on(chatter_reader, [this] { take_chatter(); });
     dispatcher.poll([this] { take_summaries(); });  // high rate: in batches, never a wake-up
     refresh_machines();
+  }
+
+  // The catalog in use and what the cell would choose for each part, for
+  // dashboards: published at start and whenever it changed.
+  void publish_catalog() {
+    try {
+      cfg::CatalogView view;
+      *view.mutable_catalog() = store::export_catalog(db);
+      const auto now = Clock::now();
+      for (const auto& part : db.parts()) {
+        if (part.retired_at_ms != 0) continue;
+        store::Job job;
+        job.id = "(part " + part.id + ")";
+        job.spec.set_part_id(part.id);
+        job.spec.set_tool_id(part.tool_id);
+        job.spec.set_spindle_rpm(part.spindle_rpm);
+        job.spec.set_feedrate_mm_s(part.feedrate_mm_s);
+        job.spec.set_depth_mm(part.total_depth_mm);
+        auto* choice = view.add_parts();
+        choice->set_part_id(part.id);
+        if (part.tool_id.empty()) {
+          choice->set_variant(cfg::SMC_UNSPECIFIED);
+          choice->set_explanation("no default tool: a job must name one");
+          continue;
+        }
+        Selection sel;
+        const PlanInputs in = bind_job(db, job, sel, [&](const std::string& id) {
+          const auto it = mills.find(id);
+          return it != mills.end() && !edge_lost_past_grace(it->second.alive, it->second.lost_since,
+                                                            started, now, opt.edge_grace);
+        });
+        choice->set_variant(sel.variant);
+        choice->set_machine_id(sel.variant == cfg::SMC_I ? in.machine.id : std::string());
+        choice->set_explanation(sel.explanation);
+        if (sel.force) choice->add_model_ids(sel.force->id);
+        if (sel.milling) choice->add_model_ids(sel.milling->id);
+      }
+      const std::string body = view.SerializeAsString();
+      if (body == catalog_sent) return;
+      catalog_sent = body;
+      view.set_updated_at_ms(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                 std::chrono::system_clock::now().time_since_epoch())
+                                 .count());
+      catalog_writer.publish("cell", "catalog", view);
+    } catch (const std::exception& e) {  // a dashboard's view never stops the cell
+      spdlog::error("the catalog cannot be published: {}", e.what());
+    }
   }
 
   // The machines the cell dispatches to: those of the database that are not
@@ -603,6 +654,7 @@ struct CellService::Impl {
                  mills.size());
     resume();
     for (const auto& j : db.jobs({.with_documents = true})) publish_status(j, "current");
+    publish_catalog();
     while (!stop.load()) {
       dispatcher.run_once(50ms);
       const int64_t v = db.data_version();
@@ -610,6 +662,7 @@ struct CellService::Impl {
         data_version = v;
         last_scan = Clock::now();
         refresh_machines();
+        publish_catalog();
         for (const auto& j : db.jobs({.state = cfg::JOB_QUEUED})) {
           if (!progress.count(j.id)) publish_status(j, "queued");
         }

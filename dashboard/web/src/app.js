@@ -22,6 +22,7 @@ const RENDER_INTERVAL_MS = 100;
 const store = {
   mills: new Map(),
   jobs: new Map(),
+  catalog: null,  // the cell's CatalogView (GET /api/catalog, 'catalog' events)
   commands: [],
   session: { operator: null, can_command: false, commands_enabled: false },
   stream: { connected: false, dropped: 0, events: 0 },
@@ -114,7 +115,7 @@ let source = null;
 // Bumped by the events that change the tables (jobs, chatter, commands), so
 // a view redraws those only when needed, not on every force sample.
 let tablesVersion = 0;
-const TABLE_EVENTS = new Set(['hello', 'job', 'progress', 'chatter', 'command', 'config', 'mill']);
+const TABLE_EVENTS = new Set(['hello', 'job', 'progress', 'chatter', 'command', 'config', 'mill', 'catalog', 'status']);
 
 function connect() {
   if (source) source.close();
@@ -136,6 +137,11 @@ function connect() {
     for (const s of d.cell.mills) applyMillState(s);
     for (const j of d.cell.jobs) setJob(j);
     store.commands = d.cell.commands.slice().reverse();
+    fetch('/api/catalog').then((r) => r.json()).then((c) => {
+      if (c.view) store.catalog = c.view;
+      tablesVersion++;
+      scheduleRender();
+    }).catch(() => {});
     if (store.focus) {
       loadHistory(store.focus, HISTORY_S);
     } else {
@@ -181,6 +187,7 @@ function connect() {
   on('program', (p) => { mill(p.machine_id).program = p.program; });
   on('command', (c) => { store.commands.unshift(c); store.commands.length = Math.min(store.commands.length, 50); });
   on('mill', (m) => { mill(m.machine_id); });
+  on('catalog', (v) => { store.catalog = v; });
   on('dropped', (d) => { store.stream.dropped += d.dropped; });
 }
 
@@ -386,10 +393,51 @@ function renderSession() {
   }
 }
 
+// The cell's catalog, read-only (it changes through smc-cell catalog apply):
+// machines with their live state, parts with the SMC a job would get and why.
+function catalogTables() {
+  const c = store.catalog;
+  if (!c) return [h('p', { class: 'muted' }, 'No catalog from the cell yet.')];
+  const cat = c.catalog ?? {};
+  const machines = (cat.machines ?? []).map((m) => {
+    const live = store.mills.get(m.id);
+    return h('tr', {},
+      h('td', { class: 'strong' }, m.id), h('td', {}, m.name),
+      h('td', {}, `${fmt(m.max_spindle_power_w, 1)} W`), h('td', {}, `${fmt(m.max_feedrate_mm_s, 1)} mm/s`),
+      h('td', {}, `${fmt(m.min_spindle_rpm, 0)}-${fmt(m.max_spindle_rpm, 0)} rpm`), h('td', {}, m.drive),
+      h('td', {}, live ? edgeBadge(live) : h('span', { class: 'muted' }, 'not seen')));
+  });
+  const models = new Map((cat.models ?? []).map((m) => [m.id, m]));
+  const parts = (cat.parts ?? []).map((p) => {
+    const choice = (c.parts ?? []).find((x) => x.part_id === p.id);
+    const used = (choice?.model_ids ?? []).map((id) => {
+      const m = models.get(id);
+      return `${id}${m?.validated ? '' : ' (not validated)'}`;
+    }).join(', ');
+    return h('tr', {},
+      h('td', { class: 'strong' }, p.id), h('td', {}, p.material_id), h('td', {}, p.tool_id),
+      h('td', {}, `${fmt(p.total_depth_mm, 2)} mm, ${fmt(p.feedrate_mm_s, 1)} mm/s, ${fmt(p.spindle_rpm, 0)} rpm`),
+      h('td', {}, h('span', { class: `badge variant ${choice?.variant ?? ''}` }, variantName(choice?.variant)),
+        choice?.machine_id ? ` on ${choice.machine_id}` : ''),
+      h('td', {}, used || h('span', { class: 'muted' }, 'none')),
+      h('td', { class: 'why' }, choice?.explanation ?? ''));
+  });
+  const table = (head, rows, empty) => h('table', { class: 'catalog' },
+    h('thead', {}, h('tr', {}, ...head.map((x) => h('th', {}, x)))),
+    h('tbody', {}, rows.length ? rows : h('tr', {}, h('td', { colspan: head.length, class: 'muted' }, empty))));
+  return [
+    h('h3', {}, 'Machines'),
+    table(['machine', 'name', 'power', 'feed', 'speed', 'drive', 'edge'], machines, 'No machines.'),
+    h('h3', {}, 'Parts'),
+    table(['part', 'material', 'tool', 'programmed cut', 'a job would get', 'models', 'why'], parts, 'No parts.'),
+  ];
+}
+
 function cellView() {
   const cards = h('div', { class: 'cards' });
   const jobs = h('section', { class: 'panel' }, h('h2', {}, 'Jobs'), h('div', { id: 'jobs' }));
-  const root = h('main', { id: 'cell-view' }, cards, jobs);
+  const catalog = h('section', { class: 'panel' }, h('h2', {}, 'Catalog'), h('div', { id: 'catalog' }));
+  const root = h('main', { id: 'cell-view' }, cards, jobs, catalog);
   const sparks = new Map();
   let drawnTables = -1;
   return {
@@ -433,6 +481,7 @@ function cellView() {
       if (drawnTables !== tablesVersion) {
         drawnTables = tablesVersion;
         document.getElementById('jobs').replaceChildren(jobsTable([...store.jobs.values()], true));
+        document.getElementById('catalog').replaceChildren(...catalogTables());
       }
     },
     destroy() { for (const s of sparks.values()) s.destroy(); },

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "dashboard_fixture.hpp"
+#include "smc/wire/documents.hpp"
 
 using namespace smc::test;
 using namespace std::chrono_literals;
@@ -307,4 +308,41 @@ TEST(DashboardApi, KeepAliveConnectionsServeSeveralRequests) {
     EXPECT_EQ(r.status, 200);
     in.erase(0, head + std::stoul(r.header("content-length")));
   }
+}
+
+// The cell's catalog, read-only: machines (joined with their live state by
+// the page) and, per part, the SMC a job would get and why.
+TEST(DashboardApi, ShowsTheCellsCatalogAndItsChoices) {
+  DashboardFixture f;
+  EXPECT_TRUE(
+      field(parse_json(http(f.port(), "GET", "/api/catalog").body), "view").has_null_value())
+      << "no catalog before the cell sends one";
+  smc::wire::DocumentPublisher<smc::config::CatalogView> catalogs(f.cell().participant);
+  smc::config::CatalogView view;
+  auto* m = view.mutable_catalog()->add_machines();
+  m->set_id("mill-c");
+  m->set_max_spindle_power_w(745.7);
+  m->set_drive("linuxcnc");
+  view.mutable_catalog()->add_parts()->set_id("bracket-tl");
+  auto* choice = view.add_parts();
+  choice->set_part_id("bracket-tl");
+  choice->set_variant(smc::config::SMC_I);
+  choice->set_machine_id("mill-c");
+  choice->set_explanation("models on mill-c ...: SMC I on mill-c (transfer line)");
+  choice->add_model_ids("bracket-tl.mill-c.force");
+  catalogs.publish("cell", "catalog", view);
+  ASSERT_TRUE(eventually([&] {
+    return field(parse_json(http(f.port(), "GET", "/api/catalog").body), "view").has_struct_value();
+  }));
+  const auto v = field(parse_json(http(f.port(), "GET", "/api/catalog").body), "view");
+  const auto& machines = field(field(v, "catalog"), "machines").list_value();
+  ASSERT_EQ(machines.values_size(), 1);
+  EXPECT_EQ(field(machines.values(0), "drive").string_value(), "linuxcnc");
+  const auto& parts = field(v, "parts").list_value();
+  ASSERT_EQ(parts.values_size(), 1);
+  EXPECT_EQ(field(parts.values(0), "variant").string_value(), "SMC_I");
+  EXPECT_EQ(field(parts.values(0), "machine_id").string_value(), "mill-c");
+  EXPECT_NE(field(parts.values(0), "explanation").string_value().find("SMC I on mill-c"),
+            std::string::npos);
+  EXPECT_EQ(http(f.port(), "POST", "/api/catalog").status, 405) << "read-only";
 }

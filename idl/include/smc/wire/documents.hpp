@@ -38,6 +38,10 @@ template <>
 struct DocumentTopic<smc::config::PartProgram> {
   static constexpr const char* kName = kProgramTopic;  // key: machine id
 };
+template <>
+struct DocumentTopic<smc::config::CatalogView> {
+  static constexpr const char* kName = kCatalogTopic;  // key: "cell"
+};
 
 // The schema a document of type M is sent and checked with.
 template <class M>

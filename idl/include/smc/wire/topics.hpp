@@ -32,6 +32,7 @@ namespace smc::wire {
 inline constexpr const char* kConfigTopic = "smc_config";         // SupervisorConfig, key machine
 inline constexpr const char* kJobTopic = "smc_job";               // JobAssignment, key machine
 inline constexpr const char* kJobStatusTopic = "smc_job_status";  // JobStatus, key job
+inline constexpr const char* kCatalogTopic = "smc_catalog";       // CatalogView, key "cell"
 inline constexpr const char* kProgramTopic = "smc_program";       // PartProgram, key machine
 
 // Copies a string into a bounded IDL string field, truncating if needed.
