@@ -266,6 +266,43 @@ TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
   EXPECT_NE(choice.find("mill-3: no validated models"), std::string::npos) << choice;
 }
 
+// The catalog's commands as a cell engineer runs them: every change
+// recorded with who and why; a retired part refused by job submission.
+TEST_F(Cell, CatalogCommandsRecordWhoAndWhy) {
+  const std::string model = "bracket-tl.mill-1.milling";
+  ASSERT_EQ(run_cmd({bin("smc-cell"), "model", "suspect", model, "--reason",
+                     "tap test disagrees by 15 %", "--author", "bob", "--db", db_}),
+            0);
+  {
+    auto db = store::Store::open(db_, store::OpenMode::kExisting);
+    EXPECT_EQ(db.model(model)->suspect_reason, "tap test disagrees by 15 %");
+    const auto h = db.history("model", model);
+    ASSERT_FALSE(h.empty());
+    EXPECT_EQ(h.back().action, "suspected");
+    EXPECT_EQ(h.back().author, "bob");
+  }
+  ASSERT_EQ(run_cmd({bin("smc-cell"), "model", "validate", model, "--evidence",
+                     "new tap test, job-12 ran clean", "--author", "bob", "--db", db_}),
+            0);
+  {
+    auto db = store::Store::open(db_, store::OpenMode::kExisting);
+    EXPECT_TRUE(db.model(model)->suspect_reason.empty());
+    EXPECT_EQ(db.history("model", model).back().reason, "new tap test, job-12 ran clean");
+  }
+  EXPECT_EQ(run_cmd({bin("smc-cell"), "model", "validate", "no-such-model", "--evidence", "x",
+                     "--db", db_}),
+            2);
+  ASSERT_EQ(run_cmd({bin("smc-cell"), "catalog", "retire", "part", "housing-js", "--reason",
+                     "superseded", "--db", db_}),
+            0);
+  EXPECT_EQ(run_cmd({bin("smc-cell"), "--log-level", "warn", "job", "submit",
+                     src("cell/jobs/job_shop.json"), "--db", db_}),
+            2)
+      << "a job for a retired part is refused";
+  EXPECT_EQ(run_cmd({bin("smc-cell"), "catalog", "show", "part", "housing-js", "--db", db_}), 0);
+  EXPECT_EQ(run_cmd({bin("smc-cell"), "catalog", "show", "widget", "x", "--db", db_}), 2);
+}
+
 TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {
   start_cell();
   start_edge("mill-1");

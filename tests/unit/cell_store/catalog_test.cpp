@@ -140,6 +140,98 @@ TEST_F(CellCatalog, BadDocumentsAreRefusedNamingFileFieldAndFix) {
               HasSubstr("has no model document"));
 }
 
+// Every kind against every class of error that applies to it: wrong type,
+// missing field, unknown reference, out-of-range limit, duplicate id. Each
+// is refused naming the file and the field, with a fix, and nothing is
+// written (refused() checks the counts and the history).
+TEST_F(CellCatalog, EachKindRefusesEachClassOfError) {
+  struct Case {
+    const char* what;
+    std::string text;
+    std::string expect;  // in the message
+  };
+  const std::string tool_ok = "id: \"t9\" teeth: 4 radius_mm: 10";
+  const std::string part_ok =
+      "material_id: \"6061-T6\" tool_id: \"fm-r25-4t\" width_mm: 10 length_mm: 50 "
+      "total_depth_mm: 1 feedrate_mm_s: 5 spindle_rpm: 1000";
+  const std::string model_refs =
+      "machine_id: \"mill-1\" tool_id: \"fm-r25-4t\" material_id: \"6061-T6\"";
+  const std::string force = "force_process { k_kn: 0.7 beta: 0.6 alpha: 0.6 }";
+  const std::vector<Case> cases{
+      // machines
+      {"machine wrong type", "machines { id: 7 }", "bad.textproto:1:"},
+      {"machine missing id",
+       "machines { max_spindle_power_w: 1 max_feedrate_mm_s: 1 max_spindle_rpm: 1 }",
+       "machines[0] ''.id: missing"},
+      {"machine out of range",
+       "machines { id: \"m9\" max_spindle_power_w: 1 max_feedrate_mm_s: 0 max_spindle_rpm: 1 }",
+       "machines[0] 'm9'.max_feedrate_mm_s: must be > 0"},
+      {"machine unknown drive",
+       "machines { id: \"m9\" max_spindle_power_w: 1 max_feedrate_mm_s: 1 max_spindle_rpm: 1 "
+       "drive: \"plc\" }",
+       "machines[0] 'm9'.drive: unknown drive 'plc'"},
+      {"machine duplicate",
+       "machines { id: \"m9\" max_spindle_power_w: 1 max_feedrate_mm_s: 1 max_spindle_rpm: 1 }"
+       "machines { id: \"m9\" max_spindle_power_w: 1 max_feedrate_mm_s: 1 max_spindle_rpm: 1 }",
+       "machines[1] 'm9': the id is given twice"},
+      // tools
+      {"tool wrong type", "tools { id: \"t9\" teeth: -4 }", "bad.textproto:1:"},
+      {"tool missing id", "tools { teeth: 4 radius_mm: 10 }", "tools[0] ''.id: missing"},
+      {"tool out of range", "tools { id: \"t9\" teeth: 4 radius_mm: -1 }",
+       "tools[0] 't9'.radius_mm: must be > 0"},
+      {"tool duplicate", "tools { " + tool_ok + " } tools { " + tool_ok + " }",
+       "tools[1] 't9': the id is given twice"},
+      // materials
+      {"material wrong type", "materials { id: [1] }", "bad.textproto:1:"},
+      {"material missing id", "materials { name: \"steel\" }", "materials[0] ''.id: missing"},
+      {"material duplicate", "materials { id: \"s\" } materials { id: \"s\" }",
+       "materials[1] 's': the id is given twice"},
+      // parts
+      {"part wrong type", "parts { id: \"p9\" width_mm: \"wide\" }", "bad.textproto:1:"},
+      {"part missing field",
+       "parts { id: \"p9\" tool_id: \"fm-r25-4t\" width_mm: 10 length_mm: 50 "
+       "total_depth_mm: 1 feedrate_mm_s: 5 spindle_rpm: 1000 }",
+       "parts[0] 'p9'.material_id: missing"},
+      {"part unknown reference",
+       "parts { id: \"p9\" material_id: \"6061-T6\" tool_id: \"no-tool\" width_mm: 10 "
+       "length_mm: 50 total_depth_mm: 1 feedrate_mm_s: 5 spindle_rpm: 1000 }",
+       "parts[0] 'p9'.tool_id: unknown tool 'no-tool'"},
+      {"part out of range",
+       "parts { id: \"p9\" material_id: \"6061-T6\" width_mm: 10 length_mm: 50 "
+       "total_depth_mm: 1 feedrate_mm_s: 5 spindle_rpm: 0 }",
+       "parts[0] 'p9'.spindle_rpm: must be > 0"},
+      {"part duplicate",
+       "parts { id: \"p9\" " + part_ok + " } parts { id: \"p9\" " + part_ok + " }",
+       "parts[1] 'p9': the id is given twice"},
+      // models
+      {"model wrong type", "models { id: \"x9\" validated: \"yes\" }", "bad.textproto:1:"},
+      {"model missing field",
+       "models { id: \"x9\" tool_id: \"fm-r25-4t\" material_id: \"6061-T6\" " + force + " }",
+       "models[0] 'x9'.machine_id: missing"},
+      {"model unknown reference",
+       "models { id: \"x9\" " + model_refs + " part_id: \"no-part\" " + force + " }",
+       "models[0] 'x9'.part_id: unknown part 'no-part'"},
+      {"model out of range",
+       "models { id: \"x9\" " + model_refs + " force_process { k_kn: -1 beta: 0.6 alpha: 0.6 } }",
+       "models[0] 'x9'.force_process: k_kn, alpha and beta must be > 0"},
+      {"model validity out of range",
+       "models { id: \"x9\" " + model_refs + " " + force + " validity { max_depth_mm: -2 } }",
+       "models[0] 'x9'.validity: bounds must be >= 0"},
+      {"model duplicate",
+       "models { id: \"x9\" " + model_refs + " " + force + " } models { id: \"x9\" " + model_refs +
+           " " + force + " }",
+       "models[1] 'x9': the id is given twice"},
+  };
+  for (const auto& c : cases) {
+    const std::string msg = refused(c.text + "\n");
+    EXPECT_THAT(msg, HasSubstr(c.expect)) << c.what;
+    EXPECT_THAT(msg, HasSubstr("bad.textproto")) << c.what << ": the file is named";
+    if (c.expect.find(".textproto:1:") == std::string::npos) {
+      EXPECT_THAT(msg, HasSubstr("fix:")) << c.what << ": a fix is given";
+    }
+  }
+}
+
 TEST_F(CellCatalog, RetiredEntitiesStayButNewJobsRefuseThem) {
   Store s = seeded();
   s.retire("part", "housing-js", "ana", "superseded by housing-js2");
