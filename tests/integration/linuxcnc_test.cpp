@@ -167,3 +167,34 @@ TEST_F(LinuxCnc, TheEdgeSeesEveryServoPeriodWhileTheMachineCuts) {
   ASSERT_EQ(revs.size(), 1u);
   EXPECT_GT(revs[0], 10) << "the spindle was seen turning: " << json;
 }
+
+// The edge's outputs act on the machine: its adaptive-feed pin (linked to
+// motion.adaptive-feed by smc-edge.hal) moves the path velocity to the new
+// share of F, and its feed-inhibit pin stops the axis and releases it —
+// every command followed, measured from LinuxCNC's own sampled velocity
+// (smc-edge hal-feed-latency; the figures go to the log, the test asserts
+// the behaviour: on this machine's non-realtime threads latency is noise).
+TEST_F(LinuxCnc, TheEdgesFeedPinsMoveAndHoldTheAxis) {
+  sv::FixedProgram p;
+  p.passes[p.count++] = {1, 10, 1500, 0};
+  const std::string file =
+      write("long.ngc", sv::render_gcode(p, {4, 25, 400, 5, 0.6, 36}, {.title = "one long pass"}));
+  int program_status = -1;
+  std::string program_json;
+  // Long enough for the measurement; it ends by its timeout and LinuxCNC
+  // is stopped by the fixture.
+  std::thread cnc([&] { program_json = run_program(file, "--timeout 20", &program_status); });
+  int st = -1;
+  const std::string json =
+      capture(src("deploy/linuxcnc/run.sh") + " exec " + smc::test::bin_path("smc-edge") +
+                  " hal-feed-latency --steps 10 --timeout 15",
+              &st);
+  cnc.join();
+  std::printf("%s", json.c_str());
+  ASSERT_EQ(st, 0) << json;
+  EXPECT_EQ(numbers_after(json, "settled"), std::vector<double>{10}) << json;
+  EXPECT_EQ(numbers_after(json, "lost"), std::vector<double>{0}) << json;
+  const auto stop = numbers_after(json, "inhibit_stop_ms");
+  ASSERT_EQ(stop.size(), 1u) << json;
+  EXPECT_GT(stop[0], 0) << "the axis decelerates to a standstill, it does not jump";
+}

@@ -20,6 +20,7 @@ void add_check(CLI::App& app);
 void add_run(CLI::App& app);
 #if SMC_HAVE_LINUXCNC
 void add_hal(CLI::App& app);
+void add_hal_latency(CLI::App& app);
 #endif
 
 }  // namespace smc::edge::cli

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   smc::edge::cli::add_run(app);
 #if SMC_HAVE_LINUXCNC
   smc::edge::cli::add_hal(app);
+  smc::edge::cli::add_hal_latency(app);
 #endif
   app.parse_complete_callback([&] { smc::log::init(log_opts); });
   try {

@@ -14,9 +14,15 @@ struct HalSampleStream::Impl {
   int comp = -1;
   hal_stream_t stream{};
   bool attached = false;
+  struct Pins {
+    hal_float_t* adaptive_feed;
+    hal_bit_t* feed_inhibit;
+  };
+  Pins* pins = nullptr;  // in HAL shared memory (hal_malloc)
 };
 
-HalSampleStream::HalSampleStream(const std::string& component, int channel) : impl_(new Impl) {
+HalSampleStream::HalSampleStream(const std::string& component, int channel, bool outputs)
+    : impl_(new Impl) {
   impl_->comp = hal_init(component.c_str());
   if (impl_->comp < 0) {
     const int err = -impl_->comp;
@@ -39,7 +45,41 @@ HalSampleStream::HalSampleStream(const std::string& component, int channel) : im
         kRecordTypes + ")");
   }
   impl_->attached = true;
+  if (!outputs) {
+    hal_ready(impl_->comp);
+    return;
+  }
+  impl_->pins = static_cast<Impl::Pins*>(hal_malloc(sizeof(Impl::Pins)));
+  if (impl_->pins == nullptr ||
+      hal_pin_float_newf(HAL_OUT, &impl_->pins->adaptive_feed, impl_->comp, "%s.adaptive-feed",
+                         component.c_str()) != 0 ||
+      hal_pin_bit_newf(HAL_OUT, &impl_->pins->feed_inhibit, impl_->comp, "%s.feed-inhibit",
+                       component.c_str()) != 0) {
+    hal_stream_detach(&impl_->stream);
+    hal_exit(impl_->comp);
+    delete impl_;
+    impl_ = nullptr;
+    throw std::runtime_error("cannot create the HAL pins of '" + component +
+                             "' (is another component of that name running?)");
+  }
+  // Program feed, no hold: what the signals hold before any edge joins
+  // (linking an output pin gives the signal the pin's value).
+  *impl_->pins->adaptive_feed = 1.0;
+  *impl_->pins->feed_inhibit = false;
   hal_ready(impl_->comp);
+  // Into the machine's signals, when its HAL configuration has them.
+  linked_ = hal_link((component + ".adaptive-feed").c_str(), "smc-adaptive-feed") == 0 &&
+            hal_link((component + ".feed-inhibit").c_str(), "smc-feed-inhibit") == 0;
+}
+
+void HalSampleStream::set_adaptive_feed(double share) noexcept {
+  if (impl_->pins == nullptr) return;
+  if (!(share >= 0)) share = 0;  // NaN too: no feed
+  *impl_->pins->adaptive_feed = share > 1 ? 1.0 : share;
+}
+
+void HalSampleStream::set_feed_inhibit(bool on) noexcept {
+  if (impl_->pins != nullptr) *impl_->pins->feed_inhibit = on;
 }
 
 HalSampleStream::~HalSampleStream() {

@@ -33,11 +33,14 @@ inline constexpr int kSamplerKey = 0x48534130;
 
 class HalSampleStream {
  public:
-  // Joins HAL as `component` and attaches to sampler channel `channel`.
+  // Joins HAL as `component` and attaches to sampler channel `channel`;
+  // with `outputs`, also creates the edge's output pins (below) and links
+  // them into the machine's signals (a reader only, e.g. a diagnostic, must
+  // not: linking an output takes the signal over).
   // Throws std::runtime_error naming the cause and the fix: HAL not
   // running (start LinuxCNC), no sampler (load deploy/linuxcnc/smc-edge.hal),
   // a sampler with other pins (its cfg must be kRecordTypes).
-  explicit HalSampleStream(const std::string& component, int channel = 0);
+  explicit HalSampleStream(const std::string& component, int channel = 0, bool outputs = false);
   ~HalSampleStream();
   HalSampleStream(const HalSampleStream&) = delete;
   HalSampleStream& operator=(const HalSampleStream&) = delete;
@@ -54,11 +57,24 @@ class HalSampleStream {
   // Records the sampler could not store because the stream was full.
   int overruns() const noexcept;
 
+  // The edge's outputs on the machine: pins <component>.adaptive-feed (the
+  // share of the program's F, 0..1) and <component>.feed-inhibit, linked at
+  // start to the signals smc-adaptive-feed and smc-feed-inhibit of
+  // deploy/linuxcnc/smc-edge.hal (which drive motion.adaptive-feed and
+  // motion.feed-inhibit). They start at "program feed, no hold". Real-time
+  // safe; no effect without `outputs`.
+  void set_adaptive_feed(double share) noexcept;  // clamped to [0, 1]
+  void set_feed_inhibit(bool on) noexcept;
+  // False when the HAL configuration has no such signals (the pins then
+  // act on nothing).
+  bool outputs_linked() const noexcept { return linked_; }
+
  private:
   struct Impl;
   Impl* impl_ = nullptr;
   std::uint64_t lost_ = 0, repeated_ = 0, records_ = 0;
   std::uint32_t last_no_ = 0;
+  bool linked_ = false;
 };
 
 }  // namespace smc::edge::linuxcnc
