@@ -181,15 +181,20 @@ TEST_F(LinuxCnc, TheEdgesFeedPinsMoveAndHoldTheAxis) {
       write("long.ngc", sv::render_gcode(p, {4, 25, 400, 5, 0.6, 36}, {.title = "one long pass"}));
   int program_status = -1;
   std::string program_json;
-  // Long enough for the measurement; it ends by its timeout and LinuxCNC
-  // is stopped by the fixture.
-  std::thread cnc([&] { program_json = run_program(file, "--timeout 20", &program_status); });
+  // Long enough for the measurement and what follows; held by the watchdog
+  // at the end, it ends by its timeout.
+  std::thread cnc([&] { program_json = run_program(file, "--timeout 25", &program_status); });
   int st = -1;
   const std::string json =
       capture(src("deploy/linuxcnc/run.sh") + " exec " + smc::test::bin_path("smc-edge") +
                   " hal-feed-latency --steps 10 --timeout 15",
               &st);
-  cnc.join();
+  struct Join {  // on every way out of the test
+    std::thread& t;
+    ~Join() {
+      if (t.joinable()) t.join();
+    }
+  } join{cnc};
   std::printf("%s", json.c_str());
   ASSERT_EQ(st, 0) << json;
   EXPECT_EQ(numbers_after(json, "settled"), std::vector<double>{10}) << json;
@@ -197,4 +202,19 @@ TEST_F(LinuxCnc, TheEdgesFeedPinsMoveAndHoldTheAxis) {
   const auto stop = numbers_after(json, "inhibit_stop_ms");
   ASSERT_EQ(stop.size(), 1u) << json;
   EXPECT_GT(stop[0], 0) << "the axis decelerates to a standstill, it does not jump";
+  // The edge is gone now, the program not: its heartbeat stopped, so the
+  // watchdog holds the feed (smc-edge.hal): the axis stands still while the
+  // program is still in its feed move.
+  int st2 = -1;
+  const std::string after =
+      capture(src("deploy/linuxcnc/run.sh") + " exec " + smc::test::bin_path("smc-edge") +
+                  " hal-samples --count 4000 --timeout 10",
+              &st2);
+  ASSERT_EQ(st2, 0) << after;
+  const auto v = numbers_after(after, "last_velocity_mm_s");
+  ASSERT_EQ(v.size(), 1u) << after;
+  EXPECT_EQ(v[0], 0) << "an edge that died leaves the machine in feed hold: " << after;
+  cnc.join();
+  EXPECT_NE(program_json.find("timed out"), std::string::npos)
+      << "the program was held mid-pass, not ended: " << program_json;
 }

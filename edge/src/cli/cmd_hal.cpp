@@ -65,11 +65,12 @@ void add_hal(CLI::App& app) {
     std::printf(
         "{\"records\": %llu, \"lost\": %llu, \"repeated\": %llu, \"overruns\": %d, "
         "\"max_backlog\": %d, \"wall_s\": %.3f, \"x_min_mm\": %.4f, \"x_max_mm\": %.4f, "
-        "\"spindle_revs\": %.3f, \"complete\": %s}\n",
+        "\"spindle_revs\": %.3f, \"last_velocity_mm_s\": %.4f, \"complete\": %s}\n",
         static_cast<unsigned long long>(s->records()), static_cast<unsigned long long>(s->lost()),
         static_cast<unsigned long long>(s->repeated()), s->overruns(), backlog_max, wall,
         s->records() > 0 ? x_min : 0.0, s->records() > 0 ? x_max : 0.0,
-        s->records() > 0 ? r.spindle_revs - first.spindle_revs : 0.0, complete ? "true" : "false");
+        s->records() > 0 ? r.spindle_revs - first.spindle_revs : 0.0,
+        s->records() > 0 ? r.velocity_mm_s : 0.0, complete ? "true" : "false");
     if (!complete) throw Failure(1, "timed out after " + std::to_string(args->timeout_s) + " s");
     if (s->lost() > 0 || s->repeated() > 0) {
       throw Failure(1, "records lost or repeated: the edge would not see every servo period");
@@ -79,8 +80,15 @@ void add_hal(CLI::App& app) {
 
 namespace {
 
+std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 // Reads what is waiting; the last record read.
 void drain(linuxcnc::HalSampleStream& s, linuxcnc::HalRecord& last) {
+  s.heartbeat(now_ns());
   while (s.read(last)) {
   }
 }
@@ -90,6 +98,7 @@ template <class P>
 bool read_until(linuxcnc::HalSampleStream& s, linuxcnc::HalRecord& r, P pred,
                 std::chrono::steady_clock::time_point deadline) {
   while (std::chrono::steady_clock::now() < deadline) {
+    s.heartbeat(now_ns());  // this tool is the edge while it runs
     if (!s.read(r)) {
       std::this_thread::sleep_for(std::chrono::microseconds(100));
       continue;

@@ -1,5 +1,6 @@
 #include "hal_stream.hpp"
 
+#include <ctime>
 #include <stdexcept>
 
 // hal.h is C and warns under C++20 -Werror: included as a system header
@@ -17,6 +18,8 @@ struct HalSampleStream::Impl {
   struct Pins {
     hal_float_t* adaptive_feed;
     hal_bit_t* feed_inhibit;
+    hal_bit_t* joined;
+    hal_bit_t* heartbeat;
   };
   Pins* pins = nullptr;  // in HAL shared memory (hal_malloc)
 };
@@ -54,6 +57,10 @@ HalSampleStream::HalSampleStream(const std::string& component, int channel, bool
       hal_pin_float_newf(HAL_OUT, &impl_->pins->adaptive_feed, impl_->comp, "%s.adaptive-feed",
                          component.c_str()) != 0 ||
       hal_pin_bit_newf(HAL_OUT, &impl_->pins->feed_inhibit, impl_->comp, "%s.feed-inhibit",
+                       component.c_str()) != 0 ||
+      hal_pin_bit_newf(HAL_OUT, &impl_->pins->joined, impl_->comp, "%s.joined",
+                       component.c_str()) != 0 ||
+      hal_pin_bit_newf(HAL_OUT, &impl_->pins->heartbeat, impl_->comp, "%s.heartbeat",
                        component.c_str()) != 0) {
     hal_stream_detach(&impl_->stream);
     hal_exit(impl_->comp);
@@ -66,10 +73,27 @@ HalSampleStream::HalSampleStream(const std::string& component, int channel, bool
   // (linking an output pin gives the signal the pin's value).
   *impl_->pins->adaptive_feed = 1.0;
   *impl_->pins->feed_inhibit = false;
+  *impl_->pins->joined = false;
+  *impl_->pins->heartbeat = false;
   hal_ready(impl_->comp);
   // Into the machine's signals, when its HAL configuration has them.
   linked_ = hal_link((component + ".adaptive-feed").c_str(), "smc-adaptive-feed") == 0 &&
             hal_link((component + ".feed-inhibit").c_str(), "smc-feed-inhibit") == 0;
+  // The watchdog: joined falls (linking gives the signal the pin's false)
+  // and rises, which re-arms a watchdog latched by an edge that died.
+  if (linked_ && hal_link((component + ".heartbeat").c_str(), "smc-heartbeat") == 0 &&
+      hal_link((component + ".joined").c_str(), "smc-edge-joined") == 0) {
+    timespec pause{0, 5'000'000};  // let the servo thread see joined low
+    nanosleep(&pause, nullptr);
+    *impl_->pins->joined = true;
+  }
+}
+
+void HalSampleStream::heartbeat(std::int64_t now_ns) noexcept {
+  if (impl_->pins == nullptr || now_ns - last_beat_ns_ < 5'000'000) return;
+  last_beat_ns_ = now_ns;
+  beat_ = !beat_;
+  *impl_->pins->heartbeat = beat_;
 }
 
 void HalSampleStream::set_adaptive_feed(double share) noexcept {

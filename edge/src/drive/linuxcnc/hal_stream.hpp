@@ -65,6 +65,12 @@ class HalSampleStream {
   // safe; no effect without `outputs`.
   void set_adaptive_feed(double share) noexcept;  // clamped to [0, 1]
   void set_feed_inhibit(bool on) noexcept;
+  // The edge is alive: toggles <component>.heartbeat at most every 5 ms
+  // (the servo thread must see each level). smc-edge.hal's watchdog
+  // inhibits the feed when it stops toggling for its timeout, once
+  // <component>.joined (set when the outputs are linked) is true. Call it
+  // every loop tick with a monotonic time. Real-time safe.
+  void heartbeat(std::int64_t now_ns) noexcept;
   // False when the HAL configuration has no such signals (the pins then
   // act on nothing).
   bool outputs_linked() const noexcept { return linked_; }
@@ -75,6 +81,8 @@ class HalSampleStream {
   std::uint64_t lost_ = 0, repeated_ = 0, records_ = 0;
   std::uint32_t last_no_ = 0;
   bool linked_ = false;
+  bool beat_ = false;
+  std::int64_t last_beat_ns_ = 0;
 };
 
 }  // namespace smc::edge::linuxcnc
