@@ -28,6 +28,14 @@ PlanInputs bind_job(store::Store& db, const store::Job& job, Selection& selectio
   const auto tool = db.tool(job.spec.tool_id());
   if (!tool)
     throw std::runtime_error("job " + job.id + ": unknown tool '" + job.spec.tool_id() + "'");
+  if (!job.spec.machine_id().empty()) {
+    const auto m = db.machine(job.spec.machine_id());
+    if (m && m->retired_at_ms != 0) {
+      throw std::runtime_error("job " + job.id + ": machine '" + m->id +
+                               "' was retired after the job was submitted; submit it again "
+                               "for another machine");
+    }
+  }
   PlanInputs in{job, *part, *tool, {}, {}};
   selection = bind_and_select(in, machine_candidates(db, job, *part, available));
   return in;

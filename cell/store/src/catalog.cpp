@@ -436,6 +436,16 @@ void Store::retire(const std::string& kind, const std::string& id, const std::st
                      (exists ? "is retired already" : "is unknown"));
   }
   record_catalog_event(kind, id, "retired", author, reason, "");
+  if (kind == "machine") {
+    // Jobs planned for it are planned again (elsewhere, or refused when
+    // they name it).
+    for (const auto& j : jobs({.state = smc::config::JOB_PLANNED})) {
+      if (j.planned_for == id || j.spec.machine_id() == id) {
+        (void)transition(j.id, smc::config::JOB_PLANNED, smc::config::JOB_QUEUED,
+                         "re-planned: machine " + id + " retired (" + reason + ")");
+      }
+    }
+  }
   tx.commit();
 }
 

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 
+#include "smc/cell/candidates.hpp"
 #include "smc/cell/dispatch.hpp"
 #include "smc/cell/planner.hpp"
 #include "smc/cell/power_plan.hpp"
@@ -331,6 +332,32 @@ TEST_F(CellChoices, NoPassIsDeeperThanTheModelsAreValidFor) {
   EXPECT_EQ(plan.config.program().passes_size(), 4) << plan.config.explanation();
   EXPECT_NE(plan.config.explanation().find("Passes no deeper than 0.5 mm"), std::string::npos)
       << plan.config.explanation();
+}
+
+// A job that names a machine retired after it was submitted is refused at
+// planning, with the reason, rather than waiting for it forever.
+TEST(Binding, AJobForAMachineRetiredAfterSubmissionIsRefusedAtPlanning) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("smc-retired-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    auto db = store::Store::open((dir / "cell.db").string());
+    store::seed_demo(db);
+    cfg::Job spec;
+    spec.set_part_id("bracket-tl");
+    spec.set_machine_id("mill-2");
+    const auto job = db.submit_job(spec);
+    db.retire("machine", "mill-2", "ana", "sold");
+    cell::Selection sel;
+    try {
+      (void)cell::bind_job(db, *db.job(job.id), sel);
+      ADD_FAILURE() << "planned for a retired machine";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("machine 'mill-2' was retired"), std::string::npos)
+          << e.what();
+    }
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST_F(CellChoices, ThePapersSmcIOnRequest) {

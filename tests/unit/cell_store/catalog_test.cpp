@@ -301,5 +301,18 @@ TEST_F(CellCatalog, ChangingAMachinesLimitsReplansItsPlannedJobs) {
   EXPECT_EQ(s.job(on2)->state, smc::config::JOB_PLANNED);
 }
 
+// Retiring a machine sends the jobs planned for it back to be planned again.
+TEST_F(CellCatalog, RetiringAMachineReplansItsPlannedJobs) {
+  Store s = seeded();
+  smc::config::Job j;
+  j.set_part_id("bracket-tl");
+  const auto job = s.submit_job(j);
+  s.set_plan(job.id, smc::config::SMC_I, "why", {}, "mill-2");
+  ASSERT_TRUE(s.transition(job.id, smc::config::JOB_QUEUED, smc::config::JOB_PLANNED, "p"));
+  s.retire("machine", "mill-2", "ana", "sold");
+  EXPECT_EQ(s.job(job.id)->state, smc::config::JOB_QUEUED);
+  EXPECT_THAT(s.events(job.id).back().reason, HasSubstr("machine mill-2 retired (sold)"));
+}
+
 }  // namespace
 }  // namespace smc::cell::store::test

@@ -147,7 +147,8 @@ class Store {
                                     const std::string& entity_id = {});
   // Retires a machine, tool, material, part or model (kind as in the
   // history): it stays in the database for the jobs that used it, and new
-  // jobs and plans refuse it. Recorded in the history. StoreError for an
+  // jobs and plans refuse it; a retired machine's planned jobs are planned
+  // again. Recorded in the history. StoreError for an
   // unknown kind or id, one retired already, or an empty reason.
   void retire(const std::string& kind, const std::string& id, const std::string& author,
               const std::string& reason);
