@@ -128,6 +128,13 @@ async function main() {
     await page.waitForSelector('#edge-badge [data-edge-state="EDGE_FEED_HOLD"]', { timeout: 5000 });
     await page.waitForSelector('.toast.ok', { timeout: 5000 });
 
+    // The part program panel: the configuration in force's G-code, or says
+    // there is none.
+    await page.waitForFunction(() => {
+      const box = document.querySelector('#program-view');
+      return box && (box.querySelector('pre.gcode') || box.textContent.includes('No G-code'));
+    }, null, { timeout: 5000 });
+
     step('5. screenshot');
     await page.waitForTimeout(1200);  // let the feed-hold span show on the chart
     mkdirSync(ARTIFACTS, { recursive: true });

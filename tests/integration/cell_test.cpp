@@ -150,6 +150,24 @@ TEST_F(Cell, DemoJobsCompleteWithTheExpectedSmcChoice) {
   EXPECT_EQ(a.result->chatter_events(), 0u);
   EXPECT_EQ(a.attempt, 1u);
   EXPECT_EQ(b.attempt, 1u);
+  // Every plan carries its G-code; the edge's rewrite publishes the G-code
+  // of the remaining depth (smc_program, transient-local: the latest).
+  EXPECT_NE(a.plan->program().gcode().find("M52 P1"), std::string::npos);
+  smc::transport::Participant p({.partition = partition_});
+  smc::wire::DocumentSubscriber<cfg::PartProgram> programs(p);
+  std::string gcode;
+  const auto deadline = Clock::now() + 20s;
+  while (gcode.empty() && Clock::now() < deadline) {
+    programs.take(
+        [&](const std::string& machine, const cfg::PartProgram& prog) {
+          if (machine == b.machine_id) gcode = prog.gcode();
+        },
+        [](const smc::transport::EnvelopeRejection&) {});
+    if (gcode.empty()) std::this_thread::sleep_for(50ms);
+  }
+  EXPECT_NE(gcode.find("rewrite 1: passes 1 to 2"), std::string::npos) << gcode;
+  EXPECT_NE(gcode.find("G0 Z-1"), std::string::npos) << gcode;
+  EXPECT_NE(gcode.find("G0 Z-2"), std::string::npos) << gcode;
 }
 
 // mill-1 differs from the models the cell holds for it

@@ -536,9 +536,10 @@ function millView(id) {
   const jobs = h('section', { class: 'panel jobs-panel' }, h('h2', {}, 'Job queue'), h('div', { id: 'mill-jobs' }));
   const chatter = h('section', { class: 'panel' }, h('h2', {}, 'Chatter events'), h('div', { id: 'chatter-list' }));
   const log = h('section', { class: 'panel' }, h('h2', {}, 'Operator commands'), h('div', { id: 'command-log' }));
+  const program = h('section', { class: 'panel' }, h('h2', {}, 'Part program (G-code)'), h('div', { id: 'program-view' }));
   const root = h('main', { id: 'mill-view', dataset: { mill: id } },
     head, h('div', { class: 'mill-grid' }, h('div', { class: 'left' }, force, power, raw, jobs,
-      h('div', { class: 'two' }, chatter, log)), grafcet));
+      h('div', { class: 'two' }, chatter, log), program), grafcet));
   let forceChart = null;
   let powerChart = null;
   let rawChart = null;
@@ -600,6 +601,26 @@ function millView(id) {
           h('td', {}, formatMachineTime(c.t, 2)), h('td', {}, c.source), h('td', { class: 'num' }, c.frequency_hz ? fmt(c.frequency_hz, 0, ' Hz') : '-'),
           h('td', { class: 'num' }, fmt(c.energy_ratio, 1)), h('td', { class: 'num' }, c.pass_index + 1), h('td', { class: 'num' }, c.new_pass_count), h('td', {}, c.job_id)))))
         : h('p', { class: 'muted' }, 'No chatter events.'));
+      // The program as a CNC control is given it: the plan's (from the
+      // configuration in force) until the chatter suppressor rewrites it,
+      // then the edge's rewrite (the remaining depth).
+      const box = root.querySelector('#program-view');
+      if (mm.program?.gcode) {
+        box.dataset.config = '';
+        box.replaceChildren(
+          h('p', { class: 'muted' }, `rewritten by the chatter suppressor (revision ${mm.program.revision}): ${mm.program.passes?.length ?? '?'} passes in all`),
+          h('pre', { class: 'gcode' }, mm.program.gcode));
+      } else if (!mm.config) {
+        box.replaceChildren(h('p', { class: 'muted' }, 'No configuration in force.'));
+      } else if (box.dataset.config !== mm.config.config_id) {
+        box.dataset.config = mm.config.config_id;
+        fetch(`/api/mills/${encodeURIComponent(id)}/config`).then((r) => r.json()).then((c) => {
+          if (mm.program?.gcode) return;
+          box.replaceChildren(c?.program?.gcode
+            ? h('pre', { class: 'gcode' }, c.program.gcode)
+            : h('p', { class: 'muted' }, 'No G-code in this configuration.'));
+        }).catch(() => {});
+      }
       const cmds = store.commands.filter((c) => c.machine_id === id).slice(0, 8);
       root.querySelector('#command-log').replaceChildren(cmds.length ? h('table', { class: 'events' },
         h('tbody', {}, ...cmds.map((c) => h('tr', {},

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "bridge.hpp"
+#include "smc/supervision/gcode.hpp"
 
 namespace smc::edge {
 
@@ -110,6 +111,22 @@ void EdgeService::Impl::on_event(const EdgeEvent& e) {
         p->set_spindle_rpm(fp.passes[static_cast<size_t>(i)].spindle_rpm);
       }
       prog.set_revision(fp.revision);
+      // The program a CNC control would be given now: the remaining depth
+      // from the pass the rewrite restarts (services/supervision gcode.hpp).
+      prog.clear_gcode();
+      try {
+        smc::config::SupervisorConfig now = job->config;
+        *now.mutable_program() = prog;
+        const int from = std::clamp(static_cast<int>(e.pass_index), 0,
+                                    std::max(0, static_cast<int>(fp.count) - 1));
+        prog.set_gcode(smc::supervision::render_gcode(
+            now, {.title = "job " + job->assignment.job_id() + " on " + opt.machine_id +
+                           ", rewrite " + std::to_string(fp.revision) + ": passes " +
+                           std::to_string(from + 1) + " to " + std::to_string(fp.count),
+                  .first_pass = from}));
+      } catch (const std::exception& ex) {
+        spdlog::warn("{}: the rewritten program has no G-code: {}", opt.machine_id, ex.what());
+      }
       program_writer.publish(opt.machine_id, job->assignment.job_id(), prog);
       if (pending_chatter) {
         pending_chatter->new_pass_count = fp.count;
