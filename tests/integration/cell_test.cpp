@@ -321,6 +321,25 @@ TEST_F(Cell, CatalogCommandsRecordWhoAndWhy) {
   EXPECT_EQ(run_cmd({bin("smc-cell"), "catalog", "show", "widget", "x", "--db", db_}), 2);
 }
 
+// Somebody else's program, written in C against the DDS C API and the IDL
+// alone (c_client/smc_c_client.c, following idl/README.md), joins the
+// running cell, reads a cutting mill's force summaries and supervisor
+// situation, and holds and releases its feed: the edge obeys both, and the
+// job still finishes.
+TEST_F(Cell, AProgramWrittenInCAgainstTheIdlHoldsTheFeed) {
+  start_cell();
+  start_edge("mill-1");
+  const std::string js = submit("cell/jobs/job_shop.json");
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+  EXPECT_EQ(run_cmd({bin("smc-c-client"), "--machine", "mill-1", "--partition", partition_,
+                     "--operator", "c-tool", "--timeout", "30"}),
+            0);
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
+  EXPECT_EQ(job(js)->state, cfg::JOB_DONE);
+}
+
 TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {
   start_cell();
   start_edge("mill-1");
