@@ -33,19 +33,19 @@ static int64_t mono_ns(void) {
   return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
-static int fail_dds(const char *what, dds_return_t rc) {
+static int fail_dds(const char* what, dds_return_t rc) {
   fprintf(stderr, "smc-c-client: %s: %s\n", what, dds_strretcode(rc));
   return 2;
 }
 
 /* The latest situation of `machine` (0 when none arrived). */
-static int read_situation(dds_entity_t reader, const char *machine, uint32_t *modules) {
-  void *samples[16] = {0};
+static int read_situation(dds_entity_t reader, const char* machine, uint32_t* modules) {
+  void* samples[16] = {0};
   dds_sample_info_t infos[16];
   int found = 0;
   dds_return_t n = dds_take(reader, samples, infos, 16, 16);
   for (dds_return_t i = 0; i < n; i++) {
-    const smc_data_SupervisorSituation *s = samples[i];
+    const smc_data_SupervisorSituation* s = samples[i];
     if (infos[i].valid_data && strcmp(s->machine_id, machine) == 0) {
       *modules = s->modules_active;
       found = 1;
@@ -55,7 +55,7 @@ static int read_situation(dds_entity_t reader, const char *machine, uint32_t *mo
   return found;
 }
 
-static dds_return_t send_command(dds_entity_t writer, const char *machine, const char *op,
+static dds_return_t send_command(dds_entity_t writer, const char* machine, const char* op,
                                  int32_t action, uint64_t id) {
   smc_data_OperatorCommand c;
   memset(&c, 0, sizeof c);
@@ -68,7 +68,7 @@ static dds_return_t send_command(dds_entity_t writer, const char *machine, const
 }
 
 /* Waits until the situation's module C is `want` (1: held, 0: released). */
-static int wait_hold(dds_entity_t reader, const char *machine, int want, int64_t deadline) {
+static int wait_hold(dds_entity_t reader, const char* machine, int want, int64_t deadline) {
   uint32_t modules = 0;
   while (mono_ns() < deadline) {
     if (read_situation(reader, machine, &modules) && ((modules & MODULE_C) != 0) == want) return 1;
@@ -77,7 +77,7 @@ static int wait_hold(dds_entity_t reader, const char *machine, int want, int64_t
   return 0;
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char** argv) {
   const char *machine = NULL, *partition = "", *op = "c-client";
   double timeout_s = 30;
   for (int i = 1; i < argc; i++) {
@@ -105,7 +105,7 @@ int main(int argc, char **argv) {
   if (participant < 0) return fail_dds("dds_create_participant", participant);
   /* The cell's partition (idl/README.md: every participant runs in the
    * partition given by --partition). */
-  dds_qos_t *pq = dds_create_qos();
+  dds_qos_t* pq = dds_create_qos();
   if (partition[0] != '\0') dds_qset_partition1(pq, partition);
   dds_entity_t sub = dds_create_subscriber(participant, pq, NULL);
   dds_entity_t pub = dds_create_publisher(participant, pq, NULL);
@@ -115,7 +115,7 @@ int main(int argc, char **argv) {
   /* smc_force_summary: telemetry, best effort, keep last 8. */
   dds_entity_t t_sum =
       dds_create_topic(participant, &smc_data_ForceSummary_desc, "smc_force_summary", NULL, NULL);
-  dds_qos_t *q = dds_create_qos();
+  dds_qos_t* q = dds_create_qos();
   dds_qset_reliability(q, DDS_RELIABILITY_BEST_EFFORT, 0);
   dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 8);
   dds_entity_t r_sum = dds_create_reader(sub, t_sum, q, NULL);
@@ -147,11 +147,11 @@ int main(int argc, char **argv) {
   int summaries = 0;
   float f_y = 0, f_ref = 0;
   while (summaries < 5 && mono_ns() < deadline) {
-    void *samples[8] = {0};
+    void* samples[8] = {0};
     dds_sample_info_t infos[8];
     dds_return_t n = dds_take(r_sum, samples, infos, 8, 8);
     for (dds_return_t i = 0; i < n; i++) {
-      const smc_data_ForceSummary *s = samples[i];
+      const smc_data_ForceSummary* s = samples[i];
       if (infos[i].valid_data && strcmp(s->machine_id, machine) == 0) {
         summaries++;
         f_y = s->f_y_peak_n;
