@@ -7,6 +7,7 @@
 #include <signal.h>
 
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -32,6 +33,19 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 std::string src(const std::string& rel) { return std::string(SMC_SOURCE_DIR) + "/" + rel; }
+
+// A command's standard output (through the shell; arguments quoted).
+std::string output_of(const std::vector<std::string>& argv) {
+  std::string cmd;
+  for (const auto& a : argv) cmd += "'" + a + "' ";
+  std::FILE* p = ::popen((cmd + "2>/dev/null").c_str(), "r");
+  std::string out;
+  if (p == nullptr) return out;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p) != nullptr) out += buf;
+  ::pclose(p);
+  return out;
+}
 
 int run_cmd(const std::vector<std::string>& argv) {
   smc::test::ChildProcess p(argv);
@@ -338,6 +352,22 @@ TEST_F(Cell, AProgramWrittenInCAgainstTheIdlHoldsTheFeed) {
   ASSERT_TRUE(wait_jobs(
       {js}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
   EXPECT_EQ(job(js)->state, cfg::JOB_DONE);
+}
+
+// smc-cell part show: the part's models on each machine with their
+// standing, what a job of it would get now and why, its history.
+TEST_F(Cell, PartShowGivesItsModelsTheChoiceAndWhy) {
+  ASSERT_EQ(run_cmd({bin("smc-cell"), "model", "suspect", "bracket-tl.mill-1.milling", "--reason",
+                     "chattered at 1 mm", "--db", db_}),
+            0);
+  const std::string out = output_of({bin("smc-cell"), "part", "show", "bracket-tl", "--db", db_});
+  EXPECT_NE(out.find("programmed cut: 2 mm at 10 mm/s, 1500 rpm"), std::string::npos) << out;
+  EXPECT_NE(out.find("on mill-1:"), std::string::npos) << out;
+  EXPECT_NE(out.find("SUSPECT: chattered at 1 mm"), std::string::npos) << out;
+  EXPECT_NE(out.find("F_Y = 0.760 kN d^0.650 f^0.630"), std::string::npos) << out;
+  EXPECT_NE(out.find("a job now: SMC I on mill-2"), std::string::npos)
+      << "mill-1's structural model is suspect: " << out;
+  EXPECT_EQ(run_cmd({bin("smc-cell"), "part", "show", "no-such-part", "--db", db_}), 2);
 }
 
 TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {
