@@ -36,17 +36,6 @@ bool known_kind(const std::string& k) {
   return k == "machine" || k == "tool" || k == "material" || k == "part" || k == "model";
 }
 
-void print_history(store::Store& s, const std::string& kind, const std::string& id) {
-  const auto h = s.history(kind, id);
-  std::printf("  history\n");
-  if (h.empty()) std::printf("    (none recorded)\n");
-  for (const auto& e : h) {
-    std::printf("    %s  %-9s by %s: %s%s%s\n", store::format_time(e.time_ms).c_str(),
-                e.action.c_str(), e.author.c_str(), e.reason.c_str(), e.detail.empty() ? "" : " — ",
-                e.detail.c_str());
-  }
-}
-
 // The entity as its document, or nullptr-like empty string when unknown.
 std::string show_entity(store::Store& s, const std::string& kind, const std::string& id,
                         std::int64_t& retired) {
@@ -241,7 +230,7 @@ SMC_CELL_COMMAND(catalog, 22) {
       if (!m->suspect_reason.empty()) std::printf("  SUSPECT: %s\n", m->suspect_reason.c_str());
     }
     std::printf("%s", doc.c_str());
-    print_history(s, sh->kind, sh->id);
+    smc::cell::cli::print_history(s, sh->kind, sh->id);
   });
 
   struct RetireArgs {

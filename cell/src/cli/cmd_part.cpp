@@ -111,12 +111,6 @@ SMC_CELL_COMMAND(part, 24) {
                            : "");
     }
     if (jobs == 0) std::printf("    (none)\n");
-    std::printf("  history\n");
-    const auto h = db.history("part", p->id);
-    if (h.empty()) std::printf("    (none recorded)\n");
-    for (const auto& e : h) {
-      std::printf("    %s  %-9s by %s: %s\n", store::format_time(e.time_ms).c_str(),
-                  e.action.c_str(), e.author.c_str(), e.reason.c_str());
-    }
+    smc::cell::cli::print_history(db, "part", p->id);
   });
 }

@@ -18,6 +18,9 @@
 namespace CLI {
 class App;
 }
+namespace smc::cell::store {
+class Store;
+}
 
 namespace smc::cell::cli {
 
@@ -37,6 +40,10 @@ struct Failure : std::runtime_error {
 
 // --db FILE, defaulting to $SMC_CELL_DB or ./smc-cell.db.
 void add_db_option(CLI::App* cmd, std::string& db);
+
+// "  history" and one line per change of a catalog entity (time, action,
+// author, reason, what changed).
+void print_history(store::Store& s, const std::string& kind, const std::string& id);
 
 }  // namespace smc::cell::cli
 

@@ -80,7 +80,17 @@ namespace {
 smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
                          const smc::config::Job& in, std::vector<FieldError>& errors) {
   smc::config::Job job = in;
-  const auto known = [&](const char* sql) { return detail::ids(db, file, sql); };
+  // The ids in use (not retired) of a catalog table, and the error for a
+  // retired entity a job names.
+  const auto in_use = [&](const std::string& table) {
+    return detail::ids(
+        db, file, ("SELECT id FROM " + table + " WHERE retired_at_ms IS NULL ORDER BY id").c_str());
+  };
+  const auto retired = [&](const char* field, const char* kind, const std::string& id,
+                           const std::string& table, const std::string& more = {}) {
+    errors.push_back({field, std::string(kind) + " '" + id + "' is retired",
+                      "use one of: " + list(in_use(table)) + more});
+  };
 
   if (!job.job_id().empty()) {
     if (!valid_job_id(job.job_id())) {
@@ -100,22 +110,14 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
 
   std::optional<Part> part;
   if (job.part_id().empty()) {
-    errors.push_back(
-        {"job.part_id", "missing",
-         "set part_id to one of: " +
-             list(known("SELECT id FROM parts WHERE retired_at_ms IS NULL ORDER BY id"))});
+    errors.push_back({"job.part_id", "missing", "set part_id to one of: " + list(in_use("parts"))});
   } else {
     part = store.part(job.part_id());
     if (!part) {
-      errors.push_back({"job.part_id",
-                        detail::unknown_ref(
-                            "part", job.part_id(),
-                            known("SELECT id FROM parts WHERE retired_at_ms IS NULL ORDER BY id")),
+      errors.push_back({"job.part_id", detail::unknown_ref("part", job.part_id(), in_use("parts")),
                         "use one of the known part ids, or add the part to the cell database"});
     } else if (part->retired_at_ms != 0) {
-      errors.push_back({"job.part_id", "part '" + part->id + "' is retired",
-                        "use one of: " + list(known("SELECT id FROM parts WHERE retired_at_ms IS "
-                                                    "NULL ORDER BY id"))});
+      retired("job.part_id", "part", part->id, "parts");
       part.reset();
     }
   }
@@ -129,17 +131,12 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
       }
     }
     if (mat && mat->retired_at_ms != 0) {
-      errors.push_back({"job.material", "material '" + mat->id + "' is retired",
-                        "use one of: " + list(known("SELECT id FROM materials WHERE retired_at_ms "
-                                                    "IS NULL ORDER BY id"))});
+      retired("job.material", "material", mat->id, "materials");
     } else if (!mat) {
-      errors.push_back(
-          {"job.material",
-           detail::unknown_ref(
-               "material", job.material(),
-               known("SELECT id FROM materials WHERE retired_at_ms IS NULL ORDER BY id")),
-           part ? "leave material out for the part's, '" + part->material_id + "'"
-                : "use one of the known material ids"});
+      errors.push_back({"job.material",
+                        detail::unknown_ref("material", job.material(), in_use("materials")),
+                        part ? "leave material out for the part's, '" + part->material_id + "'"
+                             : "use one of the known material ids"});
     } else if (part && mat->id != part->material_id) {
       errors.push_back({"job.material",
                         "part '" + part->id + "' is made of '" + part->material_id + "', not '" +
@@ -155,21 +152,14 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
   if (job.tool_id().empty() && part) job.set_tool_id(part->tool_id);
   if (job.tool_id().empty()) {
     if (part) {
-      errors.push_back(
-          {"job.tool_id", "missing, and part '" + part->id + "' names no default tool",
-           "set tool_id to one of: " +
-               list(known("SELECT id FROM tools WHERE retired_at_ms IS NULL ORDER BY id"))});
+      errors.push_back({"job.tool_id", "missing, and part '" + part->id + "' names no default tool",
+                        "set tool_id to one of: " + list(in_use("tools"))});
     }
   } else if (const auto t = store.tool(job.tool_id()); t && t->retired_at_ms != 0) {
-    errors.push_back({"job.tool_id", "tool '" + t->id + "' is retired",
-                      "use one of: " + list(known("SELECT id FROM tools WHERE retired_at_ms IS "
-                                                  "NULL ORDER BY id"))});
+    retired("job.tool_id", "tool", t->id, "tools");
   } else if (!t) {
-    errors.push_back(
-        {"job.tool_id",
-         detail::unknown_ref("tool", job.tool_id(),
-                             known("SELECT id FROM tools WHERE retired_at_ms IS NULL ORDER BY id")),
-         "use one of the known tool ids, or leave tool_id out for the part's tool"});
+    errors.push_back({"job.tool_id", detail::unknown_ref("tool", job.tool_id(), in_use("tools")),
+                      "use one of the known tool ids, or leave tool_id out for the part's tool"});
   }
 
   // Machine limits: the named machine's, or the most capable machine's when
@@ -179,19 +169,13 @@ smc::config::Job resolve(Store& store, sqlite3* db, const std::string& file,
   const auto m = job.machine_id().empty() ? std::nullopt : store.machine(job.machine_id());
   if (!job.machine_id().empty()) {
     if (m && m->retired_at_ms != 0) {
-      errors.push_back({"job.machine_id", "machine '" + m->id + "' is retired",
-                        "use one of: " +
-                            list(known("SELECT id FROM machines WHERE retired_at_ms "
-                                       "IS NULL ORDER BY id")) +
-                            ", or leave machine_id out for any capable machine"});
+      retired("job.machine_id", "machine", m->id, "machines",
+              ", or leave machine_id out for any capable machine");
     } else if (!m) {
-      errors.push_back(
-          {"job.machine_id",
-           detail::unknown_ref(
-               "machine", job.machine_id(),
-               known("SELECT id FROM machines WHERE retired_at_ms IS NULL ORDER BY id")),
-           "use one of the known machine ids, or leave machine_id out for any "
-           "capable machine"});
+      errors.push_back({"job.machine_id",
+                        detail::unknown_ref("machine", job.machine_id(), in_use("machines")),
+                        "use one of the known machine ids, or leave machine_id out for any "
+                        "capable machine"});
     }
   }
   if (m) {
