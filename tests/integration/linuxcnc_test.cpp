@@ -90,6 +90,18 @@ class LinuxCnc : public ::testing::Test {
 
 }  // namespace
 
+// Without LinuxCNC the edge's HAL side says so and what to do, and exits 2.
+TEST(LinuxCncAbsent, TheEdgeNamesTheCauseAndTheFix) {
+  int st = -1;
+  const std::string err =
+      capture(src("deploy/linuxcnc/run.sh") + " exec " + smc::test::bin_path("smc-edge") +
+                  " hal-samples --count 10 --timeout 3 2>&1",
+              &st);
+  EXPECT_EQ(st, 2) << err;
+  EXPECT_NE(err.find("is LinuxCNC running"), std::string::npos) << err;
+  EXPECT_NE(err.find("deploy/linuxcnc/run.sh start"), std::string::npos) << err;
+}
+
 // Two 1 mm passes over a 20 mm part, F capped at the mill's 36 mm/s, the
 // adaptive feed at 0.5: every cutting move runs at 18 mm/s by LinuxCNC's own
 // velocity, and the program ends retracted with the spindle off.

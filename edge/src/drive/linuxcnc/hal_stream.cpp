@@ -43,9 +43,9 @@ HalSampleStream::HalSampleStream(const std::string& component, int channel, bool
     throw std::runtime_error(
         "no sampler stream " + std::to_string(channel) + " with pins '" + kRecordTypes +
         "' (error " + std::to_string(-r) +
-        "): load it in the servo thread as deploy/linuxcnc/smc-edge.hal does (loadrt sampler "
-        "cfg=" +
-        kRecordTypes + ")");
+        "): is LinuxCNC running, with deploy/linuxcnc/smc-edge.hal loaded (loadrt sampler cfg=" +
+        kRecordTypes +
+        " in the servo thread)? Start the headless mill with deploy/linuxcnc/run.sh start");
   }
   impl_->attached = true;
   if (!outputs) {
