@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The headless LinuxCNC mill of this folder (smc-mill.ini).
 #
-#   deploy/linuxcnc/run.sh start [--dir DIR]   start it; return once it is ready
+#   deploy/linuxcnc/run.sh start [--dir DIR] [--dyno CONFIG [--plant MODEL]]
+#                                               start it; return once it is ready
 #                                               (out of E-stop, on, homed)
 #   deploy/linuxcnc/run.sh stop [--dir DIR]    stop it (the display exits, LinuxCNC
 #                                               shuts down)
@@ -15,10 +16,19 @@
 # (default /tmp/smc-linuxcnc), which that user owns: LinuxCNC writes its
 # parameter and position files there. Log: DIR/linuxcnc.log. One LinuxCNC per
 # host (fixed System V keys).
+#
+# --dyno CONFIG puts the virtual dynamometer (smc_dyno, built with the edge)
+# in the servo thread: LinuxCNC's own motion then cuts the part of CONFIG (a
+# SupervisorConfig, as for smc-edge simulate --config) and the force pins
+# read its forces; --plant MODEL cuts it on a mill that is not the model.
+# The module is installed into LinuxCNC's module folder (root), from
+# SMC_DYNO_MODULE (default build/release/lib/smc_dyno.so).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 user=${SMC_CNC_USER:-smc-cnc}
 dir=/tmp/smc-linuxcnc
+dyno_config=
+dyno_plant=
 action=${1:-}
 [[ $# -gt 0 ]] && shift
 case "$action" in
@@ -43,6 +53,8 @@ fi
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --dir) dir=$2; shift 2 ;;
+    --dyno) dyno_config=$(realpath "$2"); shift 2 ;;
+    --plant) dyno_plant=$(realpath "$2"); shift 2 ;;
     *) echo "run.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -69,6 +81,18 @@ rm -rf "$dir"
 mkdir -p "$dir"
 cp "$here"/smc-mill.ini "$here"/smc-mill.hal "$here"/smc-edge.hal "$here"/smc-mill.tbl \
   "$here"/smc-display "$dir"/
+if [[ -n $dyno_config ]]; then
+  [[ -r $dyno_config ]] || { echo "run.sh: --dyno $dyno_config: no such file" >&2; exit 2; }
+  [[ -z $dyno_plant || -r $dyno_plant ]] || { echo "run.sh: --plant $dyno_plant: no such file" >&2; exit 2; }
+  module=${SMC_DYNO_MODULE:-$here/../../build/release/lib/smc_dyno.so}
+  [[ -f $module ]] || { echo "run.sh: $module: not built (cmake --build --preset ci)" >&2; exit 1; }
+  rtlib=/usr/lib/linuxcnc/modules  # LinuxCNC 2.9 loads realtime modules only from here
+  install -m644 "$module" "$rtlib/smc_dyno.so" || {
+    echo "run.sh: cannot install the dynamometer into $rtlib (run as root)" >&2; exit 1; }
+  sed "s|@CONFIG@|$dyno_config|; s|@PLANT@|${dyno_plant:+ plant=$dyno_plant}|" \
+    "$here"/smc-dyno.hal.in >"$dir"/smc-dyno.hal
+  sed -i 's/^HALFILE = smc-edge.hal$/HALFILE = smc-dyno.hal\nHALFILE = smc-edge.hal/' "$dir"/smc-mill.ini
+fi
 [[ ${#as[@]} -eq 0 ]] || chown -R "$user" "$dir"
 launch=("${as[@]}" "${env_of[@]}" SMC_CNC_READY="$dir/ready" SMC_CNC_STOP="$dir/stop"
   linuxcnc -r "$dir/smc-mill.ini")

@@ -26,6 +26,7 @@
 
 #include "smc/common/clock.hpp"
 #include "smc/edge/core.hpp"
+#include "smc/edge/linuxcnc_drive.hpp"
 #include "smc/edge/realtime.hpp"
 #include "smc/edge/service.hpp"
 #include "smc/edge/sim_mill.hpp"
@@ -58,7 +59,9 @@ struct RunningJob {
   std::atomic<bool> paced_done{false};
   smc::config::JobAssignment assignment;
   smc::config::SupervisorConfig config;
-  std::unique_ptr<SimulatedMill> mill;
+  std::unique_ptr<Drive> mill;   // the simulated mill or LinuxCNC
+  LinuxCncDrive* cnc = nullptr;  // mill, when it is LinuxCNC
+  std::string failure;           // why the job ended failed, when the edge knows
   std::unique_ptr<EdgeCore> core;
   std::unique_ptr<RealTimeEdge> rt;
   // What the comms thread knows of the loop, only from the core's rings (the

@@ -44,11 +44,35 @@ void EdgeService::Impl::start_job(const smc::config::JobAssignment& a) {
   j->assignment = a;
   j->config = *config;  // already carries the mill's model (check())
   EdgeConfig ec = edge_config_from_proto(j->config);
-  j->mill = std::make_unique<SimulatedMill>(j->config.milling_model(), j->config.simulation(),
-                                            ec.params.sample_period_s);
-  j->core = std::make_unique<EdgeCore>(ec, *j->mill);
-  j->core->set_batch_decimation(opt.batch_decimation);
-  j->core->start();
+  const std::string tag = a.job_id() + "#" + std::to_string(a.attempt());
+  try {
+    if (opt.drive == "linuxcnc") {
+      LinuxCncDriveOptions lo;
+      lo.machine_id = opt.machine_id;
+      lo.program_dir = opt.program_dir;
+      auto d = std::make_unique<LinuxCncDrive>(j->config, ec.params.sample_period_s, lo);
+      j->cnc = d.get();
+      j->mill = std::move(d);
+    } else {
+      j->mill = std::make_unique<SimulatedMill>(j->config.milling_model(), j->config.simulation(),
+                                                ec.params.sample_period_s);
+    }
+    j->core = std::make_unique<EdgeCore>(ec, *j->mill);
+    j->core->set_batch_decimation(opt.batch_decimation);
+    j->core->start();  // the drive's load(): LinuxCNC checks and opens the program
+  } catch (const std::exception& e) {
+    // Nothing ran: the cell hears why, and the assignment is not taken again.
+    journal(tag);
+    started.insert(tag);
+    smc_data_JobProgress p{};
+    set_string(p.machine_id, opt.machine_id);
+    set_string(p.job_id, a.job_id());
+    p.phase = smc_data_JOB_FAILED;
+    set_string(p.message, std::string("the machine cannot run it: ") + e.what());
+    progress_writer.write(p);
+    spdlog::error("{}: job {} not started: {}", opt.machine_id, a.job_id(), e.what());
+    return;
+  }
   j->program = ec.program;
   rt::RtOptions ro;
   ro.period = std::chrono::nanoseconds(
@@ -59,13 +83,26 @@ void EdgeService::Impl::start_job(const smc::config::JobAssignment& a) {
   }
   ro.overrun_threshold = opt.overrun_threshold;
   j->rt = std::make_unique<RealTimeEdge>(*j->core, ro, clock);
-  const std::string tag = a.job_id() + "#" + std::to_string(a.attempt());
   journal(tag);
   started.insert(tag);
   job = std::move(j);
   operator_inputs = OperatorInputs{};
   job->rt->push_operator_inputs(operator_inputs);
-  if (!paced()) {
+  if (job->cnc != nullptr) {
+    // LinuxCNC's servo thread paces the loop: one tick per servo record (a
+    // tick without one is the drive's stale-record fault).
+    RunningJob* rj = job.get();
+    rj->pacer = std::thread([rj] {
+      rt::TickInfo info{};
+      while (!rj->stop_pacer && !rj->core->done()) {
+        (void)rj->cnc->wait_sample(std::chrono::milliseconds(20));
+        rj->rt->tick(info);
+        ++info.index;
+      }
+      rj->paced_done = true;
+    });
+    spdlog::info("{}: job {} on LinuxCNC, paced by its servo thread", opt.machine_id, a.job_id());
+  } else if (!paced()) {
     job->rt->start();
     spdlog::info("{}: real-time set-up: {}", opt.machine_id,
                  rt::summary(job->rt->setup_report(), ro));
@@ -126,6 +163,12 @@ void EdgeService::Impl::publish_progress(smc_data_JobPhase phase, const std::str
 }
 
 bool EdgeService::Impl::job_running() const {
+  if (job->cnc != nullptr) {
+    // A LinuxCNC fault ends the job: the drive holds the feed and LinuxCNC's
+    // program is aborted; the cell hears why.
+    if (job->failure.empty()) job->failure = job->cnc->fault();
+    return job->failure.empty() && !job->paced_done.load();
+  }
   return !paced() ? job->rt->loop().running() : !job->paced_done.load();
 }
 
@@ -146,8 +189,14 @@ void EdgeService::Impl::finish_job() {
     pending_chatter.reset();
   }
   const bool ok = job->done;
-  publish_progress(ok ? smc_data_JOB_DONE : smc_data_JOB_FAILED,
-                   ok ? "program complete" : "stopped before the end");
+  if (!ok && job->failure.empty() && job->cnc != nullptr) job->failure = job->cnc->fault();
+  if (job->cnc != nullptr) {
+    spdlog::info("{}: LinuxCNC servo records: {} read, {} lost, {} repeated", opt.machine_id,
+                 job->cnc->samples(), job->cnc->lost_samples(), job->cnc->repeated_samples());
+  }
+  publish_progress(
+      ok ? smc_data_JOB_DONE : smc_data_JOB_FAILED,
+      ok ? "program complete" : (job->failure.empty() ? "stopped before the end" : job->failure));
   spdlog::info("{}: job {} {}", opt.machine_id, job->assignment.job_id(), ok ? "done" : "failed");
   job.reset();
   if (pending) {

@@ -21,8 +21,9 @@ void add_run(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "run",
       "Run the edge of one mill on DDS: take configurations and jobs from the cell, run each\n"
-      "job in the 2 kHz real-time loop on the simulated mill, publish force, chatter,\n"
-      "supervisor state, status and progress. Stops cleanly on SIGINT or SIGTERM.");
+      "job in the 2 kHz real-time loop on the simulated mill (or on LinuxCNC: --drive\n"
+      "linuxcnc), publish force, chatter, supervisor state, status and progress. Stops\n"
+      "cleanly on SIGINT or SIGTERM.");
   sub->add_option("--machine", opt->machine_id, "Machine id (the cell addresses this edge by it)")
       ->required();
   sub->add_option("--domain", opt->domain_id, "DDS domain id")->capture_default_str();
@@ -42,6 +43,15 @@ void add_run(CLI::App& app) {
                   "The simulated mill's own milling model (default: the configuration's)")
       ->check(CLI::ExistingFile);
   sub->add_flag("--no-realtime", *no_rt, "Do not ask for SCHED_FIFO and mlockall");
+  sub->add_option("--drive", opt->drive,
+                  "The machine: sim (the simulated mill) or linuxcnc (the LinuxCNC running on\n"
+                  "this host with deploy/linuxcnc/smc-edge.hal; its servo thread paces the loop;\n"
+                  "run as LinuxCNC's user: deploy/linuxcnc/run.sh exec smc-edge run ...)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"sim", "linuxcnc"}));
+  sub->add_option("--program-dir", opt->program_dir,
+                  "Where the G-code handed to LinuxCNC is written (--drive linuxcnc)")
+      ->capture_default_str();
   sub->add_option("--state-file", opt->state_file,
                   "Journal of the job attempts this edge started, kept across restarts: one\n"
                   "started by an earlier run is reported interrupted, never cut again");
@@ -54,6 +64,16 @@ void add_run(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(0.1, 1000.0));
   sub->callback([opt, lease_ms, no_rt, overrun_ms] {
+    if (opt->drive == "linuxcnc" && opt->speedup != 1.0) {
+      throw Failure(2, "--speedup: LinuxCNC runs in real time (its servo thread paces the loop)");
+    }
+#if !SMC_HAVE_LINUXCNC
+    if (opt->drive == "linuxcnc") {
+      throw Failure(2,
+                    "--drive linuxcnc: this smc-edge was built without LinuxCNC (install "
+                    "linuxcnc-uspace-dev with deploy/setup.sh and build again)");
+    }
+#endif
     opt->lease = std::chrono::milliseconds(*lease_ms);
     opt->realtime = !*no_rt;
     opt->overrun_threshold = std::chrono::microseconds(static_cast<int64_t>(*overrun_ms * 1000));

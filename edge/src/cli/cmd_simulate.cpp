@@ -9,6 +9,7 @@
 #include "commands.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/edge/core.hpp"
+#include "smc/edge/linuxcnc_drive.hpp"
 #include "smc/edge/replay_drive.hpp"
 #include "smc/edge/runner.hpp"
 #include "smc/edge/sim_mill.hpp"
@@ -31,6 +32,8 @@ struct SimulateArgs {
   double plant_gain = 1;
   double runout_um = 0;
   bool quiet = false;
+  std::string drive = "sim";
+  std::string program_dir = "/tmp/smc-programs";
 };
 
 // The simulated mill's cutting coefficients times `gain`: a plant whose
@@ -91,7 +94,9 @@ void add_simulate(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "simulate",
       "Run one part program in virtual time on the simulated mill (or a recorded force file)\n"
-      "and write per-sample and per-revolution CSV, a JSON summary and SVG plots.");
+      "and write per-sample and per-revolution CSV, a JSON summary and SVG plots. With\n"
+      "--drive linuxcnc the same run is cut in real time by the LinuxCNC running on this host\n"
+      "(deploy/linuxcnc/run.sh start --dyno CONFIG), with the same outputs.");
   sub->add_option("--config", args->config,
                   "Supervisor configuration (textproto or JSON), e.g.\n"
                   "edge/configs/smc2.textproto")
@@ -127,6 +132,14 @@ void add_simulate(CLI::App& app) {
       ->check(CLI::Range(0.0, smc::machining::kMaxRunoutUm))
       ->capture_default_str();
   sub->add_flag("--quiet", args->quiet, "Print nothing but errors");
+  sub->add_option("--drive", args->drive,
+                  "sim (the simulated mill, virtual time) or linuxcnc (the running LinuxCNC, real\n"
+                  "time; run as its user: deploy/linuxcnc/run.sh exec smc-edge simulate ...)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"sim", "linuxcnc"}));
+  sub->add_option("--program-dir", args->program_dir,
+                  "Where the G-code handed to LinuxCNC is written (--drive linuxcnc)")
+      ->capture_default_str();
   sub->callback([args] {
     smc::config::SupervisorConfig raw;
     EdgeConfig cfg = load_config(args->config, raw);
@@ -162,8 +175,23 @@ void add_simulate(CLI::App& app) {
     }
     for (double t : args->chatter_at) opts.inputs.push_back({ScheduledInput::kChatterSignal, t});
     std::unique_ptr<Drive> drive;
+    LinuxCncDrive* cnc = nullptr;
     try {
-      if (!args->replay.empty()) {
+      if (args->drive == "linuxcnc") {
+        if (!args->replay.empty() || !args->mill_model.empty() || args->plant_gain != 1 ||
+            args->runout_um > 0) {
+          throw Failure(2,
+                        "--drive linuxcnc: the plant is LinuxCNC's (its dynamometer: "
+                        "run.sh start --dyno CONFIG [--plant MODEL]); --replay, --mill-model, "
+                        "--plant-gain and --runout-um are for the simulated mill");
+        }
+        LinuxCncDriveOptions lo;
+        lo.machine_id = "smc-simulate";
+        lo.program_dir = args->program_dir;
+        auto d = std::make_unique<LinuxCncDrive>(raw, cfg.params.sample_period_s, lo);
+        cnc = d.get();
+        drive = std::move(d);
+      } else if (!args->replay.empty()) {
         drive = std::make_unique<ReplayDrive>(args->replay, cfg.params.sample_period_s);
       } else {
         drive = std::make_unique<SimulatedMill>(raw.milling_model(), raw.simulation(),
@@ -175,7 +203,17 @@ void add_simulate(CLI::App& app) {
       throw Failure(2, e.what());
     }
     EdgeCore core(cfg, *drive);
-    core.start();
+    try {
+      core.start();
+    } catch (const std::runtime_error& e) {
+      throw Failure(2, e.what());  // LinuxCNC not ready, or refused the program
+    }
+    if (cnc != nullptr) {
+      opts.before_tick = [cnc] {
+        (void)cnc->wait_sample(std::chrono::milliseconds(20));
+        return cnc->fault().empty();
+      };
+    }
     const auto t0 = std::chrono::steady_clock::now();
     double next_report = 5.0;
     opts.on_tick = [&](const EdgeCore& c) {
@@ -196,6 +234,16 @@ void add_simulate(CLI::App& app) {
       print_summary(summary, args->out);
       std::printf("  %.1f s of machine time in %.2f s (%.0fx real time)\n", run.end_time_s, wall,
                   run.end_time_s / std::max(wall, 1e-9));
+    }
+    if (cnc != nullptr) {
+      if (!args->quiet) {
+        std::printf("  LinuxCNC servo records: %llu read, %llu lost, %llu repeated\n",
+                    static_cast<unsigned long long>(cnc->samples()),
+                    static_cast<unsigned long long>(cnc->lost_samples()),
+                    static_cast<unsigned long long>(cnc->repeated_samples()));
+      }
+      const std::string why = cnc->fault();
+      if (!why.empty()) throw Failure(4, "LinuxCNC: " + why + " (the feed is held)");
     }
     if (!run.completed) throw Failure(3, "the program did not complete within --max-time");
   });

@@ -62,6 +62,7 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
       core.set_operator_inputs(op);
       ++next_input;
     }
+    if (options.before_tick && !options.before_tick()) break;
     core.tick(false);
     if (options.on_tick) options.on_tick(core);
     if (options.keep_samples && i % static_cast<uint64_t>(decimation) == 0) {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "smc/edge/parameters.hpp"
+#include "smc/machining/anti_alias.hpp"
 #include "smc/machining/model_proto.hpp"
 #include "smc/machining/simulator.hpp"
 #include "smc_config.pb.h"
@@ -21,37 +22,7 @@ void use_plant_model(smc::config::MillingModel& configured, smc::config::Milling
 
 namespace {
 
-// Second-order Butterworth low-pass by the bilinear transform (with
-// pre-warping), run at the simulator's internal step: the anti-alias filter
-// in front of the force sensor's sampler.
-class LowPass {
- public:
-  void configure(double cutoff_hz, double rate_hz) noexcept {
-    const double k = std::tan(std::numbers::pi * cutoff_hz / rate_hz);
-    const double q = std::numbers::sqrt2 / 2;
-    const double norm = 1.0 / (1.0 + k / q + k * k);
-    b0_ = k * k * norm;
-    b1_ = 2 * b0_;
-    b2_ = b0_;
-    a1_ = 2 * (k * k - 1) * norm;
-    a2_ = (1 - k / q + k * k) * norm;
-    reset();
-  }
-  void reset() noexcept { z1_ = z2_ = 0; }
-  double operator()(double x) noexcept {
-    const double y = b0_ * x + z1_;
-    z1_ = b1_ * x - a1_ * y + z2_;
-    z2_ = b2_ * x - a2_ * y;
-    // A decaying state would sink into subnormal numbers in air and make
-    // every step a hundred times slower: flush it.
-    if (std::fabs(z1_) < 1e-30) z1_ = 0;
-    if (std::fabs(z2_) < 1e-30) z2_ = 0;
-    return y;
-  }
-
- private:
-  double b0_ = 1, b1_ = 0, b2_ = 0, a1_ = 0, a2_ = 0, z1_ = 0, z2_ = 0;
-};
+using LowPass = machining::AntiAliasLowPass;
 
 enum class Phase { kCutting, kRepositioning, kDone };
 
@@ -159,12 +130,9 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
   s.trace_z.assign(steps, 0.0);
   const double rate = 1.0 / s.sim.internal_step_s();
   // A cut-off of 0 (or above Nyquist) means no filter on that channel.
-  auto cfg = [&](LowPass& lp, double hz) {
-    lp.configure(hz > 0 && hz < rate / 2 ? hz : rate * 0.45, rate);
-  };
-  cfg(s.lp_x, sim.f_y_cutoff_hz());
-  cfg(s.lp_y, sim.f_y_cutoff_hz());
-  cfg(s.lp_z, sim.f_z_cutoff_hz());
+  s.lp_x.configure(sim.f_y_cutoff_hz(), rate);
+  s.lp_y.configure(sim.f_y_cutoff_hz(), rate);
+  s.lp_z.configure(sim.f_z_cutoff_hz(), rate);
   s.removed.assign(static_cast<size_t>(std::ceil(s.length() / s.bin_mm)) + 1, 0.0);
   const auto& w = s.model.workpiece;
   const double y_lo = w.offset_mm - w.width_mm / 2, y_hi = w.offset_mm + w.width_mm / 2;

@@ -102,17 +102,7 @@ std::string render_gcode(const FixedProgram& p, const CutGeometry& g, const Gcod
   return out;
 }
 
-std::string render_gcode(const smc::config::SupervisorConfig& c, const GcodeOptions& o) {
-  FixedProgram p;
-  const auto& passes = c.program().passes();
-  if (passes.size() > FixedProgram::kMaxPasses) {
-    throw std::invalid_argument("G-code: program.passes: more than " +
-                                std::to_string(FixedProgram::kMaxPasses));
-  }
-  for (const auto& s : passes) {
-    p.passes[p.count++] = {s.depth_mm(), s.feedrate_mm_s(), s.spindle_rpm(), s.force_reference_n()};
-  }
-  p.revision = c.program().revision();
+CutGeometry cut_geometry(const smc::config::SupervisorConfig& c) {
   CutGeometry g;
   g.teeth = static_cast<int>(c.operation().teeth());
   g.cutter_radius_mm = c.operation().cutter_radius_mm();
@@ -124,7 +114,21 @@ std::string render_gcode(const smc::config::SupervisorConfig& c, const GcodeOpti
                                                    : 5.0;
   g.max_feed_per_tooth_mm = c.operation().max_feed_per_tooth_mm();
   g.max_feedrate_mm_s = c.machine().max_feedrate_mm_s();
-  return render_gcode(p, g, o);
+  return g;
+}
+
+std::string render_gcode(const smc::config::SupervisorConfig& c, const GcodeOptions& o) {
+  FixedProgram p;
+  const auto& passes = c.program().passes();
+  if (passes.size() > FixedProgram::kMaxPasses) {
+    throw std::invalid_argument("G-code: program.passes: more than " +
+                                std::to_string(FixedProgram::kMaxPasses));
+  }
+  for (const auto& s : passes) {
+    p.passes[p.count++] = {s.depth_mm(), s.feedrate_mm_s(), s.spindle_rpm(), s.force_reference_n()};
+  }
+  p.revision = c.program().revision();
+  return render_gcode(p, cut_geometry(c), o);
 }
 
 }  // namespace smc::supervision

@@ -27,6 +27,9 @@ struct RunOptions {
   std::vector<ScheduledInput> inputs;  // sorted or not; applied in time order
   // Called after every tick (tests use it to check invariants at each step).
   std::function<void(const EdgeCore&)> on_tick;
+  // Called before every tick: a drive paced by a real machine waits there for
+  // its next sample (the LinuxCNC drive). Returning false ends the run.
+  std::function<bool()> before_tick;
   bool keep_samples = true;   // keep the per-sample trace
   int sample_decimation = 1;  // keep every n-th sample
 };

@@ -54,6 +54,10 @@ struct ServiceOptions {
   // run again but reported interrupted, so the cell re-queues it. Empty:
   // remembered in memory only.
   std::string state_file;
+  // The machine: "sim" (the simulated mill, default) or "linuxcnc" (the
+  // running LinuxCNC, linuxcnc_drive.hpp: its servo records pace the loop).
+  std::string drive = "sim";
+  std::string program_dir = "/tmp/smc-programs";  // G-code handed to LinuxCNC
 };
 
 class EdgeService {

@@ -20,6 +20,7 @@ struct HalSampleStream::Impl {
     hal_bit_t* feed_inhibit;
     hal_bit_t* joined;
     hal_bit_t* heartbeat;
+    hal_bit_t* job_start;
   };
   Pins* pins = nullptr;  // in HAL shared memory (hal_malloc)
 };
@@ -61,6 +62,8 @@ HalSampleStream::HalSampleStream(const std::string& component, int channel, bool
       hal_pin_bit_newf(HAL_OUT, &impl_->pins->joined, impl_->comp, "%s.joined",
                        component.c_str()) != 0 ||
       hal_pin_bit_newf(HAL_OUT, &impl_->pins->heartbeat, impl_->comp, "%s.heartbeat",
+                       component.c_str()) != 0 ||
+      hal_pin_bit_newf(HAL_OUT, &impl_->pins->job_start, impl_->comp, "%s.job-start",
                        component.c_str()) != 0) {
     hal_stream_detach(&impl_->stream);
     hal_exit(impl_->comp);
@@ -75,6 +78,7 @@ HalSampleStream::HalSampleStream(const std::string& component, int channel, bool
   *impl_->pins->feed_inhibit = false;
   *impl_->pins->joined = false;
   *impl_->pins->heartbeat = false;
+  *impl_->pins->job_start = false;
   hal_ready(impl_->comp);
   // Into the machine's signals, when its HAL configuration has them.
   linked_ = hal_link((component + ".adaptive-feed").c_str(), "smc-adaptive-feed") == 0 &&
@@ -87,6 +91,12 @@ HalSampleStream::HalSampleStream(const std::string& component, int channel, bool
     nanosleep(&pause, nullptr);
     *impl_->pins->joined = true;
   }
+  // A part counter, or the virtual dynamometer's new blank, when present.
+  (void)hal_link((component + ".job-start").c_str(), "smc-job-start");
+}
+
+void HalSampleStream::set_job_start(bool on) noexcept {
+  if (impl_->pins != nullptr) *impl_->pins->job_start = on;
 }
 
 void HalSampleStream::heartbeat(std::int64_t now_ns) noexcept {

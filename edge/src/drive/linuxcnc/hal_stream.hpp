@@ -71,6 +71,10 @@ class HalSampleStream {
   // <component>.joined (set when the outputs are linked) is true. Call it
   // every loop tick with a monotonic time. Real-time safe.
   void heartbeat(std::int64_t now_ns) noexcept;
+  // <component>.job-start, linked to smc-job-start when the configuration
+  // has it (deploy/linuxcnc/smc-dyno.hal: a fresh blank; on a real machine
+  // a part counter): high while a job's program is being started.
+  void set_job_start(bool on) noexcept;
   // False when the HAL configuration has no such signals (the pins then
   // act on nothing).
   bool outputs_linked() const noexcept { return linked_; }

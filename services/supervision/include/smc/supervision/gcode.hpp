@@ -54,6 +54,9 @@ struct GcodeOptions {
 std::string render_gcode(const FixedProgram& program, const CutGeometry& geometry,
                          const GcodeOptions& options = {});
 
+// The configuration's cutter, part length, approach and feed clamp.
+CutGeometry cut_geometry(const smc::config::SupervisorConfig& config);
+
 // The configuration's program, cutter, part length and feed clamp.
 std::string render_gcode(const smc::config::SupervisorConfig& config,
                          const GcodeOptions& options = {});

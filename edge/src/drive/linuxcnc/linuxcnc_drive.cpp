@@ -1,0 +1,411 @@
+#include "smc/edge/linuxcnc_drive.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <numbers>
+#include <thread>
+#include <vector>
+
+#include "cnc_control.hpp"
+#include "hal_stream.hpp"
+#include "smc/supervision/gcode.hpp"
+#include "smc_config.pb.h"
+
+namespace smc::edge {
+
+namespace {
+
+std::int64_t now_ns() noexcept {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return static_cast<std::int64_t>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
+
+// Which pass each cutting line (G1) of a rendered program belongs to.
+struct LineMap {
+  std::array<int, FixedProgram::kMaxPasses> g1_line{};  // 1-based file line
+  int first_pass = 0;
+  int count = 0;
+};
+
+LineMap map_lines(const std::string& gcode, int first_pass) {
+  LineMap m;
+  m.first_pass = first_pass;
+  int line = 1;
+  std::size_t pos = 0;
+  while (pos < gcode.size()) {
+    if (gcode.compare(pos, 3, "G1 ") == 0 && m.count < FixedProgram::kMaxPasses) {
+      m.g1_line[static_cast<std::size_t>(m.count++)] = line;
+    }
+    pos = gcode.find('\n', pos);
+    if (pos == std::string::npos) break;
+    ++pos;
+    ++line;
+  }
+  return m;
+}
+
+enum class CncFault : int { kNone, kStale, kEstop, kOff, kNotAuto, kProgram, kLinuxCnc };
+
+}  // namespace
+
+struct LinuxCncDrive::Impl {
+  smc::config::SupervisorConfig config;
+  LinuxCncDriveOptions opt;
+  double period_s = 0;
+  std::unique_ptr<linuxcnc::CncControl> cnc;
+  std::unique_ptr<linuxcnc::HalSampleStream> stream;
+  double axis_max_mm_s = 0;
+
+  // The program as the loop knows it, and the line map of what LinuxCNC runs.
+  FixedProgram program;
+  std::array<LineMap, 2> maps{};
+  std::atomic<int> map_index{0};
+  // Engagement: tooth-tip angles on the leading half over the part's band.
+  std::vector<double> band_cos;
+  double radius_mm = 0, length_mm = 0;
+
+  // Loop → control thread.
+  std::atomic<bool> loop_live{false};
+  std::atomic<int> rewrite_asked{0};  // generation
+  FixedProgram rewrite_program;       // written by the loop before rewrite_asked
+  int rewrite_from = 0;
+  // Control thread → loop.
+  std::atomic<int> rewrite_done{0};
+  std::atomic<bool> started{false};
+  std::atomic<bool> done{false};
+  std::atomic<int> fault{static_cast<int>(CncFault::kNone)};
+  mutable std::mutex why_mu;
+  std::string why;  // the fault's words (control thread, or stale from the loop)
+  std::string last_path;
+  std::thread control;
+  std::atomic<bool> stop{false};
+
+  // Loop state.
+  linuxcnc::HalRecord rec{};
+  std::int64_t last_record_ns = 0;
+  std::uint64_t ticks = 0;
+  int pass = 0;
+  bool in_pass = false;
+  bool job_start_high = false;
+  std::uint64_t drained = 0;  // records from before the job
+
+  void set_fault(CncFault f, const std::string& words) {
+    int none = static_cast<int>(CncFault::kNone);
+    if (fault.compare_exchange_strong(none, static_cast<int>(f))) {
+      std::lock_guard lk(why_mu);
+      why = words;
+    }
+  }
+
+  supervision::CutGeometry geometry;
+
+  // Not real-time: renders passes [first_pass, count) of `p`, writes them
+  // to the program folder, and maps their cutting lines.
+  std::string write_program(const FixedProgram& p, int first_pass, LineMap& map) {
+    supervision::GcodeOptions go;
+    go.title =
+        "smc-edge " + opt.machine_id + ", configuration " + config.config_id() +
+        (first_pass > 0 ? ", the rewrite's remainder from pass " + std::to_string(first_pass + 1)
+                        : "");
+    go.first_pass = first_pass;
+    const std::string text = supervision::render_gcode(p, geometry, go);
+    std::filesystem::create_directories(opt.program_dir);
+    std::filesystem::permissions(opt.program_dir, std::filesystem::perms::all,
+                                 std::filesystem::perm_options::add);
+    const std::string path = opt.program_dir + "/" + opt.machine_id + "-r" +
+                             std::to_string(p.revision) + "-p" + std::to_string(first_pass + 1) +
+                             ".ngc";
+    {
+      std::ofstream out(path, std::ios::trunc);
+      out << text;
+      if (!out) throw std::runtime_error(path + ": cannot write the program");
+    }
+    map = map_lines(text, first_pass);
+    last_path = path;
+    return path;
+  }
+
+  void control_loop();
+};
+
+LinuxCncDrive::LinuxCncDrive(const smc::config::SupervisorConfig& config, double sample_period_s,
+                             LinuxCncDriveOptions options)
+    : impl_(std::make_unique<Impl>()), period_s_(sample_period_s) {
+  Impl& d = *impl_;
+  d.config = config;
+  d.opt = std::move(options);
+  d.period_s = sample_period_s;
+  d.geometry = supervision::cut_geometry(config);
+  d.radius_mm = d.geometry.cutter_radius_mm;
+  d.length_mm = d.geometry.part_length_mm;
+  const auto& w = config.milling_model().workpiece();
+  const double y_lo = w.offset_mm() - w.width_mm() / 2, y_hi = w.offset_mm() + w.width_mm() / 2;
+  for (int k = 0; k < 181; ++k) {
+    const double th = -std::numbers::pi / 2 + std::numbers::pi * k / 180.0;
+    const double y = d.radius_mm * std::sin(th);
+    if (y >= y_lo && y <= y_hi) d.band_cos.push_back(std::cos(th));
+  }
+  d.cnc = std::make_unique<linuxcnc::CncControl>(d.opt.nml_file);
+}
+
+LinuxCncDrive::~LinuxCncDrive() {
+  Impl& d = *impl_;
+  d.stop = true;
+  if (d.control.joinable()) d.control.join();
+  if (d.stream) {
+    d.stream->set_adaptive_feed(0);
+    d.stream->set_feed_inhibit(true);
+  }
+  // A program still running (the job was stopped or failed) is aborted: the
+  // machine never runs on without its supervisor.
+  if (!d.done) {
+    try {
+      d.cnc->abort();
+    } catch (const std::exception& e) {
+      spdlog::error("{}: cannot abort LinuxCNC's program: {}", d.opt.machine_id, e.what());
+    }
+  }
+}
+
+void LinuxCncDrive::load(const FixedProgram& program) {
+  Impl& d = *impl_;
+  if (d.control.joinable()) throw std::logic_error("LinuxCncDrive::load: one job per drive");
+  d.cnc->require_ready();
+  d.axis_max_mm_s = d.cnc->status().max_velocity_mm_s;
+  d.program = program;
+  const std::string path = d.write_program(program, 0, d.maps[0]);
+  d.map_index = 0;
+  d.cnc->open_program(path);
+  // Join HAL with the feed held until the loop runs.
+  d.stream = std::make_unique<linuxcnc::HalSampleStream>(d.opt.machine_id, 0, true);
+  if (!d.stream->outputs_linked()) {
+    throw std::runtime_error(
+        "LinuxCNC's HAL has no smc-adaptive-feed/smc-feed-inhibit signals: load "
+        "deploy/linuxcnc/smc-edge.hal (the shipped smc-mill.ini does)");
+  }
+  d.stream->set_adaptive_feed(0);
+  d.stream->set_feed_inhibit(true);
+  d.stream->set_job_start(true);
+  d.job_start_high = true;
+  // Records from before this job are not this job's.
+  linuxcnc::HalRecord skip;
+  while (d.stream->read(skip)) ++d.drained;
+  d.last_record_ns = now_ns();
+  spdlog::info("{}: LinuxCNC opened {} ({} passes); axes at most {:.1f} mm/s", d.opt.machine_id,
+               path, program.count, d.axis_max_mm_s);
+  d.control = std::thread([&d] { d.control_loop(); });
+}
+
+void LinuxCncDrive::Impl::control_loop() {
+  using namespace std::chrono_literals;
+  // Start once the loop beats, so that the machine never moves unsupervised.
+  while (!stop && !loop_live) std::this_thread::sleep_for(1ms);
+  if (stop) return;
+  try {
+    cnc->run();
+    started = true;
+    spdlog::info("{}: LinuxCNC runs {}", opt.machine_id, last_path);
+  } catch (const std::exception& e) {
+    set_fault(CncFault::kProgram, e.what());
+    return;
+  }
+  int handled = 0;
+  int idle_polls = 0;
+  while (!stop) {
+    std::this_thread::sleep_for(5ms);
+    linuxcnc::CncStatus st;
+    try {
+      st = cnc->status();
+      for (const auto& m : cnc->take_errors()) {
+        spdlog::warn("{}: LinuxCNC: {}", opt.machine_id, m);
+        set_fault(CncFault::kLinuxCnc, "LinuxCNC: " + m);
+      }
+    } catch (const std::exception& e) {
+      set_fault(CncFault::kLinuxCnc, e.what());
+      return;
+    }
+    if (st.estop)
+      set_fault(CncFault::kEstop, "LinuxCNC went into E-stop during the job");
+    else if (!st.on)
+      set_fault(CncFault::kOff, "LinuxCNC's machine was switched off during the job");
+    else if (!st.auto_mode) {
+      set_fault(CncFault::kNotAuto,
+                "LinuxCNC left auto mode during the job (an operator or "
+                "another program took it to manual or MDI)");
+    }
+    if (fault != static_cast<int>(CncFault::kNone)) {
+      try {
+        cnc->abort();
+      } catch (const std::exception&) {
+      }
+      return;
+    }
+    const int asked = rewrite_asked.load(std::memory_order_acquire);
+    if (asked != handled) {
+      // A safe point: the feed is held by the loop; wait for standstill.
+      if (std::fabs(st.velocity_mm_s) > 1e-3) continue;
+      try {
+        cnc->abort();
+        LineMap& m = maps[static_cast<std::size_t>(1 - map_index.load())];
+        const std::string path = write_program(rewrite_program, rewrite_from, m);
+        cnc->open_program(path);
+        map_index.store(1 - map_index.load(), std::memory_order_release);
+        cnc->run();
+        spdlog::info("{}: LinuxCNC runs the rewritten program {} from pass {}", opt.machine_id,
+                     path, rewrite_from + 1);
+      } catch (const std::exception& e) {
+        set_fault(CncFault::kProgram,
+                  std::string("handing the rewritten program over: ") + e.what());
+        return;
+      }
+      handled = asked;
+      rewrite_done.store(asked, std::memory_order_release);
+      idle_polls = 0;
+      continue;
+    }
+    // The program ended (M2) when the interpreter stays idle.
+    idle_polls = st.interp_idle ? idle_polls + 1 : 0;
+    if (idle_polls >= 3) {
+      done = true;
+      return;
+    }
+  }
+}
+
+bool LinuxCncDrive::wait_sample(std::chrono::nanoseconds timeout) noexcept {
+  Impl& d = *impl_;
+  if (!d.stream) return false;
+  const std::int64_t until = now_ns() + timeout.count();
+  while (d.stream->backlog() <= 0) {
+    if (now_ns() >= until) return false;
+    timespec pause{0, 50'000};
+    nanosleep(&pause, nullptr);
+  }
+  return true;
+}
+
+Status LinuxCncDrive::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept {
+  Impl& d = *impl_;
+  if (!d.stream) return Status::kError;
+  const std::int64_t now = now_ns();
+  d.stream->heartbeat(now);
+  d.loop_live.store(true, std::memory_order_release);
+  ++d.ticks;
+  if (d.job_start_high && d.ticks > 20) {  // 10 ms: the servo thread has seen it
+    d.stream->set_job_start(false);
+    d.job_start_high = false;
+  }
+  if (d.stream->read(d.rec)) {
+    d.last_record_ns = now;
+  } else if (static_cast<double>(now - d.last_record_ns) > d.opt.stale_after_s * 1e9) {
+    d.fault.store(static_cast<int>(CncFault::kStale));  // words in fault()
+  }
+  const bool faulted = d.fault.load(std::memory_order_acquire) != static_cast<int>(CncFault::kNone);
+  const bool rewriting = d.rewrite_asked.load(std::memory_order_relaxed) !=
+                         d.rewrite_done.load(std::memory_order_acquire);
+  // Where LinuxCNC is in the program: the cutting line (G1) of a pass is the
+  // pass; the moves between (rapid positioning in air) are not.
+  const LineMap& map =
+      d.maps[static_cast<std::size_t>(d.map_index.load(std::memory_order_acquire))];
+  if (!rewriting) {
+    d.pass = map.first_pass;
+    d.in_pass = false;
+    for (int k = map.count - 1; k >= 0; --k) {
+      const int line = map.g1_line[static_cast<std::size_t>(k)];
+      if (d.rec.program_line >= line) {
+        d.pass = map.first_pass + k;
+        d.in_pass = d.rec.program_line == line;
+        break;
+      }
+    }
+  } else {
+    d.in_pass = false;
+  }
+  // The feed. In a pass: the share of what LinuxCNC runs the G1 at, held on
+  // a command of 0 (the supervisor's hold). Between passes LinuxCNC runs
+  // the program's own positioning, as the simulated mill does. Held for good
+  // after a fault, and while a rewrite is handed over.
+  const int pass_now = std::clamp(d.pass, 0, std::max(0, d.program.count - 1));
+  const PassSpec& spec = d.program.passes[static_cast<std::size_t>(pass_now)];
+  double f_max = d.geometry.max_feed_per_tooth_mm * d.geometry.teeth * spec.spindle_rpm / 60.0;
+  if (d.geometry.max_feedrate_mm_s > 0) f_max = std::min(f_max, d.geometry.max_feedrate_mm_s);
+  if (d.axis_max_mm_s > 0) f_max = std::min(f_max, d.axis_max_mm_s);
+  const bool hold = faulted || rewriting || (d.in_pass && !(feedrate_cmd_mm_s > 0));
+  d.stream->set_feed_inhibit(hold);
+  double share = d.in_pass && f_max > 0 ? feedrate_cmd_mm_s / f_max : 1.0;
+  if (hold) share = 0;
+  d.stream->set_adaptive_feed(share);
+
+  const PassSpec& cur = d.program.passes[static_cast<std::size_t>(
+      std::clamp(d.pass, 0, std::max(0, d.program.count - 1)))];
+  out.force =
+      ForceSample{static_cast<double>(d.ticks) * d.period_s, d.rec.fx_n, d.rec.fy_n, d.rec.fz_n};
+  out.spindle_rpm = d.rec.spindle_rps * 60.0;
+  out.depth_mm = cur.depth_mm;
+  out.programmed_feedrate_mm_s = cur.feedrate_mm_s;
+  out.feedrate_mm_s = d.in_pass ? d.rec.velocity_mm_s : 0.0;
+  out.x_mm = d.rec.x_mm;
+  out.pass_index = d.pass;
+  out.in_pass = d.in_pass;
+  out.program_done = d.done.load(std::memory_order_acquire) && !rewriting;
+  int in_cut = 0;
+  if (d.in_pass) {
+    for (double c : d.band_cos) {
+      const double tip = d.rec.x_mm + d.radius_mm * c;
+      if (tip >= 0 && tip <= d.length_mm) ++in_cut;
+    }
+  }
+  out.engagement = d.band_cos.empty()
+                       ? 0.0
+                       : static_cast<double>(in_cut) / static_cast<double>(d.band_cos.size());
+  return faulted ? Status::kError : Status::kOk;
+}
+
+Status LinuxCncDrive::rewrite(const FixedProgram& program, int from) noexcept {
+  Impl& d = *impl_;
+  if (from < 0 || from >= program.count || !d.stream) return Status::kError;
+  d.stream->set_feed_inhibit(true);
+  d.stream->set_adaptive_feed(0);
+  d.program = program;
+  d.rewrite_program = program;
+  d.rewrite_from = from;
+  d.pass = from;
+  d.in_pass = false;
+  d.rewrite_asked.fetch_add(1, std::memory_order_release);
+  return Status::kOk;
+}
+
+std::string LinuxCncDrive::fault() const {
+  const Impl& d = *impl_;
+  const int f = d.fault.load();
+  if (f == static_cast<int>(CncFault::kNone)) return {};
+  if (f == static_cast<int>(CncFault::kStale)) {
+    return "LinuxCNC's servo records stopped coming (none for " +
+           std::to_string(static_cast<int>(d.opt.stale_after_s * 1000)) +
+           " ms): its servo thread stalled or LinuxCNC stopped";
+  }
+  std::lock_guard lk(d.why_mu);
+  return d.why;
+}
+
+std::uint64_t LinuxCncDrive::lost_samples() const noexcept {
+  return impl_->stream ? impl_->stream->lost() : 0;
+}
+std::uint64_t LinuxCncDrive::repeated_samples() const noexcept {
+  return impl_->stream ? impl_->stream->repeated() : 0;
+}
+std::uint64_t LinuxCncDrive::samples() const noexcept {
+  return impl_->stream ? impl_->stream->records() - impl_->drained : 0;
+}
+std::string LinuxCncDrive::last_program_path() const { return impl_->last_path; }
+
+}  // namespace smc::edge
