@@ -4,20 +4,25 @@
 # and one job-shop job (SMC II) and prints a live summary until both finish.
 # This is the README's demo command; it installs what it needs first.
 #
-#   deploy/demo.sh [--speedup N] [--keep]
+#   deploy/demo.sh [--speedup N] [--keep] [--linuxcnc]
 #     --speedup N  machine seconds per wall second for the simulated mills (default 2)
 #     --keep       leave the cell running after the jobs finish (Ctrl-C ends it)
+#     --linuxcnc   mill-1 is a headless LinuxCNC (deploy/linuxcnc/) whose own
+#                  motion cuts the paper's part through the virtual
+#                  dynamometer, in real time; mill-2 stays simulated
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 
 speedup=2
 keep=0
+linuxcnc=0
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --speedup) speedup="$2"; shift 2 ;;
     --keep) keep=1; shift ;;
-    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    --linuxcnc) linuxcnc=1; shift ;;
+    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
     *) echo "demo: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -26,6 +31,7 @@ deploy/setup.sh
 echo "== building (ci preset: the same build tree and flags as deploy/test.sh)"
 cmake --preset ci >/dev/null
 targets=(smc-cell smc-edge smc-dashboard)
+[[ $linuxcnc -eq 0 ]] || targets+=(smc_dyno)
 cmake --build --preset ci --target "${targets[@]}"
 bin=$root/build/release/bin
 
@@ -36,6 +42,7 @@ pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
   wait 2>/dev/null || true
+  [[ $linuxcnc -eq 0 ]] || deploy/linuxcnc/run.sh stop --dir "$run/linuxcnc" >/dev/null 2>&1 || true
   echo "demo: logs and database kept in $run"
 }
 trap cleanup EXIT INT TERM
@@ -53,7 +60,19 @@ declare -A true_model=(
   [mill-1]="$root/cell/models/paper_face_mill.textproto"
   [mill-2]="$root/cell/models/paper_face_mill_mismatched.textproto"
 )
-for m in mill-1 mill-2; do
+mills=(mill-1 mill-2)
+if [[ $linuxcnc -eq 1 ]]; then
+  echo "   mill-1 is LinuxCNC (its log: $run/linuxcnc/linuxcnc.log), cutting the paper's part"
+  chmod 755 "$run"
+  deploy/linuxcnc/run.sh start --dir "$run/linuxcnc" --dyno "$root/edge/configs/smc2.textproto"
+  mkdir -p "$run/programs" && chmod 777 "$run/programs"
+  deploy/linuxcnc/run.sh exec env CYCLONEDDS_URI="$CYCLONEDDS_URI" "$bin/smc-edge" run \
+    --machine mill-1 --drive linuxcnc --partition "$partition" --no-realtime \
+    --program-dir "$run/programs" >"$run/mill-1.log" 2>&1 &
+  pids+=($!)
+  mills=(mill-2)
+fi
+for m in "${mills[@]}"; do
   echo "   $m cuts as $(basename "${true_model[$m]}")"
   "$bin/smc-edge" run --machine "$m" --partition "$partition" --paced --speedup "$speedup" \
     --mill-model "${true_model[$m]}" >"$run/$m.log" 2>&1 &

@@ -8,19 +8,32 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <optional>
 #include <regex>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "child_process.hpp"
+#include "smc/cell/store/store.hpp"
+#include "smc/documents/load.hpp"
 #include "smc/supervision/gcode.hpp"
+#include "smc/transport/endpoint.hpp"
+#include "smc/transport/participant.hpp"
+#include "smc/wire/topics.hpp"
+#include "smc_config.pb.h"
 
 namespace sv = smc::supervision;
+namespace store = smc::cell::store;
+namespace cfg = smc::config;
 
 namespace {
 
@@ -229,4 +242,497 @@ TEST_F(LinuxCnc, TheEdgesFeedPinsMoveAndHoldTheAxis) {
   cnc.join();
   EXPECT_NE(program_json.find("timed out"), std::string::npos)
       << "the program was held mid-pass, not ended: " << program_json;
+}
+
+// ---------------------------------------------------------------------------
+// The cell on LinuxCNC: LinuxCNC headless with the virtual dynamometer (the
+// paper's mill and part), the cell service, and one edge with --drive
+// linuxcnc, run as the mill's user. The paper's transfer-line job (SMC I)
+// and a job-shop job on a part of the same geometry (SMC II) run to the end.
+// What happened is read from LinuxCNC's own status (smc-cnc watch), and the
+// figures are compared with smc-edge simulate on the configuration the cell
+// sent.
+
+namespace {
+
+// One row of smc-cnc watch.
+struct Watch {
+  double t_s = 0;
+  std::string file;
+  int line = 0, motion_type = 0;
+  double x = 0, z = 0, v = 0, adaptive = 0;
+  bool inhibit = false;
+  int interp = 0;
+};
+
+std::vector<Watch> read_watch(const std::string& path) {
+  std::vector<Watch> rows;
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    Watch w;
+    char file[256] = {};
+    int inhibit = 0;
+    if (std::sscanf(line.c_str(), "%lf,%255[^,],%d,%d,%lf,%lf,%lf,%lf,%d,%d", &w.t_s, file, &w.line,
+                    &w.motion_type, &w.x, &w.z, &w.v, &w.adaptive, &inhibit, &w.interp) == 10) {
+      w.file = file;
+      w.inhibit = inhibit != 0;
+      rows.push_back(w);
+    } else if (std::sscanf(line.c_str(), "%lf,,%d,%d,%lf,%lf,%lf,%lf,%d,%d", &w.t_s, &w.line,
+                           &w.motion_type, &w.x, &w.z, &w.v, &w.adaptive, &inhibit,
+                           &w.interp) == 9) {
+      w.inhibit = inhibit != 0;
+      rows.push_back(w);
+    }
+  }
+  return rows;
+}
+
+double monotonic_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// The Z levels at which a program's feed moves crossed the whole part, by
+// LinuxCNC's own position.
+std::vector<double> full_passes(const std::vector<Watch>& rows, const std::string& file_prefix,
+                                double x_from, double x_to) {
+  std::map<long, std::pair<double, double>> span;  // z in µm -> x range
+  for (const auto& r : rows) {
+    if (r.motion_type != 2 || r.file.rfind(file_prefix, 0) != 0) continue;
+    auto& s = span.try_emplace(std::lround(r.z * 1000), 1e9, -1e9).first->second;
+    s.first = std::min(s.first, r.x);
+    s.second = std::max(s.second, r.x);
+  }
+  std::vector<double> out;
+  for (const auto& [z, s] : span) {
+    if (s.first <= x_from && s.second >= x_to) out.push_back(static_cast<double>(z) / 1000);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+class LinuxCncCell : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const char* uri = std::getenv("CYCLONEDDS_URI");
+    ASSERT_NE(uri, nullptr) << "the tests' DDS profile (loopback only) must be set";
+    uri_ = uri;
+    partition_ = smc::test::unique_partition("lcnc");
+    dir_ = std::filesystem::temp_directory_path() / partition_;
+    std::filesystem::create_directories(dir_ / "programs");
+    // The mill's user writes the programs and the watch file here.
+    ::chmod(dir_.c_str(), 0777);
+    ::chmod((dir_ / "programs").c_str(), 0777);
+    db_ = (dir_ / "cell.db").string();
+    int st = -1;
+    std::string out =
+        capture(src("deploy/linuxcnc/run.sh") + " start --dir " + (dir_ / "cnc").string() +
+                    " --dyno " + src("edge/configs/smc2.textproto"),
+                &st);
+    ASSERT_EQ(st, 0) << out;
+    started_ = true;
+    out = capture(bin("smc-cell") + " db init --seed --db " + db_ + " 2>&1", &st);
+    ASSERT_EQ(st, 0) << out;
+    // A job-shop part of the paper's geometry (the dynamometer's blank):
+    // no models, so SMC II.
+    const std::string part = (dir_ / "part.textproto").string();
+    std::ofstream(part) << "parts { id: \"housing-150\" name: \"housing, 150 mm (no models)\" "
+                           "material_id: \"6061-T6\" tool_id: \"fm-r25-4t\" width_mm: 48 "
+                           "offset_mm: 0 length_mm: 150 total_depth_mm: 2 feedrate_mm_s: 10 "
+                           "spindle_rpm: 1500 }\n";
+    out = capture(bin("smc-cell") + " catalog apply " + part + " --db " + db_ +
+                      " --author test --reason 'a job-shop part of the blank on LinuxCNC' 2>&1",
+                  &st);
+    ASSERT_EQ(st, 0) << out;
+    cell_.emplace(std::vector<std::string>{bin("smc-cell"), "--log-level", "warn", "serve", "--db",
+                                           db_, "--partition", partition_, "--edge-grace-ms",
+                                           "1500"});
+    watch_.emplace(std::vector<std::string>{src("deploy/linuxcnc/run.sh"), "exec",
+                                            src("deploy/linuxcnc/smc-cnc"), "watch", "--out",
+                                            watch_file()});
+    edge_.emplace(std::vector<std::string>{
+        src("deploy/linuxcnc/run.sh"), "exec", "env", "CYCLONEDDS_URI=" + uri_, bin("smc-edge"),
+        "--log-level", "warn", "run", "--machine", "mill-1", "--drive", "linuxcnc", "--partition",
+        partition_, "--lease-ms", "1000", "--no-realtime", "--program-dir",
+        (dir_ / "programs").string()});
+  }
+  void TearDown() override {
+    // The mill's user's processes stop on SIGTERM (runuser passes it on).
+    for (auto* p : {&edge_, &watch_}) {
+      if (*p) {
+        (*p)->kill(SIGTERM);
+        (*p)->wait();
+        p->reset();
+      }
+    }
+    cell_.reset();
+    if (started_) {
+      int st = -1;
+      const std::string out =
+          capture(src("deploy/linuxcnc/run.sh") + " stop --dir " + (dir_ / "cnc").string(), &st);
+      EXPECT_EQ(st, 0) << out;
+    }
+    std::filesystem::remove_all(dir_);
+  }
+
+  static std::string bin(const std::string& name) { return smc::test::bin_path(name); }
+  std::string watch_file() const { return (dir_ / "watch.csv").string(); }
+
+  std::string submit(const std::string& file) {
+    const auto before = jobs();
+    int st = -1;
+    const std::string out = capture(
+        bin("smc-cell") + " --log-level warn job submit " + file + " --db " + db_ + " 2>&1", &st);
+    EXPECT_EQ(st, 0) << out;
+    for (const auto& j : jobs()) {
+      bool known = false;
+      for (const auto& b : before) known = known || b.id == j.id;
+      if (!known) return j.id;
+    }
+    return {};
+  }
+  std::vector<store::Job> jobs() {
+    auto db = store::Store::open(db_, store::OpenMode::kExisting);
+    return db.jobs({.with_documents = true});
+  }
+  store::Job job(const std::string& id) {
+    auto db = store::Store::open(db_, store::OpenMode::kExisting);
+    return *db.job(id);
+  }
+  bool wait_state(const std::string& id, cfg::JobState state, std::chrono::seconds limit) {
+    const auto until = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < until) {
+      const auto j = job(id);
+      if (j.state == state) return true;
+      if (store::is_terminal(j.state)) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+    return false;
+  }
+  // The job's events, for messages.
+  std::string history(const std::string& id) {
+    auto db = store::Store::open(db_, store::OpenMode::kExisting);
+    std::string out;
+    for (const auto& e : db.events(id)) out += e.reason + "\n";
+    return out;
+  }
+
+  std::string uri_, partition_, db_;
+  std::filesystem::path dir_;
+  bool started_ = false;
+  std::optional<smc::test::ChildProcess> cell_, watch_, edge_;
+};
+
+}  // namespace
+
+TEST_F(LinuxCncCell, ThePapersJobsRunOnLinuxCncAsOnTheSimulatedMill) {
+  using namespace std::chrono_literals;
+  namespace tr = smc::transport;
+  tr::Participant participant({.partition = partition_});
+  tr::Topic<smc_data_OperatorCommand> topic(participant);
+  tr::Writer<smc_data_OperatorCommand> commands(topic);
+  auto command = [&](int32_t action, uint64_t id) {
+    smc_data_OperatorCommand c{};
+    smc::wire::set_string(c.machine_id, "mill-1");
+    smc::wire::set_string(c.operator_name, "test");
+    c.command_id = id;
+    c.action = action;
+    commands.write(c);
+  };
+
+  // 1. The transfer-line job (SMC I); mid-cut, an operator feed hold for 1 s.
+  const std::string tl = submit(src("cell/jobs/transfer_line.textproto"));
+  ASSERT_FALSE(tl.empty());
+  ASSERT_TRUE(wait_state(tl, cfg::JOB_RUNNING, 60s)) << history(tl);
+  ASSERT_TRUE(commands.wait_for_readers(1, std::chrono::seconds(10))) << "the edge's reader";
+  double t_hold = 0, v_hold = 0;
+  for (const auto until = std::chrono::steady_clock::now() + 60s;
+       t_hold == 0 && std::chrono::steady_clock::now() < until;) {
+    const auto rows = read_watch(watch_file());
+    // In the first pass's feed move, well inside the part, at speed.
+    if (!rows.empty() && rows.back().motion_type == 2 && rows.back().x > 40 && rows.back().v > 3 &&
+        !rows.back().inhibit) {
+      t_hold = monotonic_s();
+      v_hold = rows.back().v;
+      command(smc_data_OP_FEED_HOLD_ON, 1);
+    } else {
+      std::this_thread::sleep_for(20ms);
+    }
+  }
+  ASSERT_GT(t_hold, 0) << "the first pass never reached X40";
+  std::this_thread::sleep_for(1s);
+  command(smc_data_OP_FEED_HOLD_OFF, 2);
+  ASSERT_TRUE(wait_state(tl, cfg::JOB_DONE, 150s)) << history(tl);
+
+  // 2. The job-shop job (SMC II): chatter, a rewritten program.
+  const std::string js_file = (dir_ / "job_shop.textproto").string();
+  std::ofstream(js_file) << "part_id: \"housing-150\" material: \"6061-T6\" tool_id: "
+                            "\"fm-r25-4t\" depth_mm: 2 feedrate_mm_s: 10 spindle_rpm: 1500\n";
+  const std::string js = submit(js_file);
+  ASSERT_FALSE(js.empty());
+  ASSERT_TRUE(wait_state(js, cfg::JOB_DONE, 180s)) << history(js);
+  std::this_thread::sleep_for(200ms);  // the watch's last lines
+  watch_->kill(SIGTERM);
+  watch_->wait();
+  watch_.reset();
+  const auto rows = read_watch(watch_file());
+  ASSERT_GT(rows.size(), 1000u);
+
+  const store::Job a = job(tl), b = job(js);
+  EXPECT_EQ(a.variant, cfg::SMC_I) << a.explanation;
+  EXPECT_EQ(b.variant, cfg::SMC_II) << b.explanation;
+  ASSERT_TRUE(a.result && b.result && a.plan && b.plan);
+
+  // From LinuxCNC's status: SMC I cut its two planned passes across the
+  // part (X from before the part to past its end) at Z-1 and Z-2.
+  // The drive names each program <machine>-<configuration>-r<revision>-p<pass>.
+  const std::string prog_a = "mill-1-" + a.id + "-a1-r";
+  const std::string prog_b = "mill-1-" + b.id + "-a1-r";
+  EXPECT_EQ(full_passes(rows, prog_a + "0-p1", -20, 170), (std::vector<double>{-2, -1}));
+  // SMC II: the rewritten program (revision 1, from pass 1) ran both of its
+  // passes across the part; the original one-pass program did not finish.
+  EXPECT_EQ(full_passes(rows, prog_b + "1-p1", -20, 170), (std::vector<double>{-2, -1}))
+      << "LinuxCNC completes the rewritten program in two passes";
+  EXPECT_TRUE(full_passes(rows, prog_b + "0-p1", -20, 170).empty());
+  EXPECT_GE(b.result->chatter_events(), 1u);
+  EXPECT_EQ(b.result->passes_completed(), 2u);
+  EXPECT_EQ(rows.back().interp, 1) << "LinuxCNC ended idle";
+
+  // The operator's feed hold: LinuxCNC's feed-inhibit, then standstill,
+  // within one 10 ms module period, LinuxCNC's deceleration (v / 500 mm/s²)
+  // and 20 ms for DDS, the edge's comms thread and this watch's 1 ms polls.
+  double t_inhibit = -1, t_stop = -1;
+  for (const auto& r : rows) {
+    if (r.t_s < t_hold) continue;
+    if (t_inhibit < 0 && r.inhibit) t_inhibit = r.t_s;
+    if (t_inhibit >= 0 && t_stop < 0 && r.v < 1e-3) t_stop = r.t_s;
+  }
+  ASSERT_GE(t_inhibit, 0) << "the hold reached motion.feed-inhibit";
+  ASSERT_GE(t_stop, 0) << "the axis stopped";
+  const double bound = 0.010 + v_hold / 500.0 + 0.020;
+  std::printf(
+      "feed hold: inhibit after %.1f ms, standstill after %.1f ms from %.2f mm/s "
+      "(bound %.1f ms)\n",
+      (t_inhibit - t_hold) * 1e3, (t_stop - t_hold) * 1e3, v_hold, bound * 1e3);
+  EXPECT_LE(t_stop - t_hold, bound);
+
+  // The axis velocity follows the adaptive feed: in feed moves, not held,
+  // with the adaptive feed steady over the last 40 ms (the acceleration
+  // limit takes up to 36 mm/s / 500 mm/s² = 72 ms for a full step; the
+  // controller's steps are far smaller), velocity = adaptive x 36 mm/s.
+  std::vector<double> err;
+  for (std::size_t i = 0, j = 0; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    while (rows[j].t_s < r.t_s - 0.040) ++j;
+    if (r.motion_type != 2 || r.inhibit || r.adaptive <= 0.05) continue;
+    bool steady = true;
+    for (std::size_t k = j; k <= i && steady; ++k) {
+      steady = rows[k].motion_type == 2 && !rows[k].inhibit &&
+               std::fabs(rows[k].adaptive - r.adaptive) < 0.01;
+    }
+    if (steady) err.push_back(std::fabs(r.v - r.adaptive * 36.0));
+  }
+  ASSERT_GT(err.size(), 1000u) << "steady feed samples";
+  std::sort(err.begin(), err.end());
+  const double p50 = err[err.size() / 2], p95 = err[err.size() * 95 / 100];
+  std::printf("velocity - adaptive feed x 36 mm/s: p50 %.3f, p95 %.3f mm/s over %zu samples\n", p50,
+              p95, err.size());
+  EXPECT_LT(p50, 0.1);
+  EXPECT_LT(p95, 0.5);
+
+  // The figures agree with smc-edge simulate on the configuration the cell
+  // sent (smc-cell job show --config) and the dynamometer's mill:
+  //  - passes and chatter events: equal;
+  //  - peak force: within 5 % of F_ref without chatter; within 10 % with
+  //    it, since the peak is reached while chatter grows, and LinuxCNC's
+  //    hold decelerates (10 mm/s at 500 mm/s²: 20 ms, half a revolution)
+  //    where the simulated mill stops at once;
+  //  - cycle time: LinuxCNC's is longer by what the simulated mill
+  //    idealises: its program starts the spindle and approaches the part
+  //    at the axes' acceleration limits (up to 6 s), and each rewrite adds a
+  //    stop, an abort, a retract, a new spindle start and approach (up to
+  //    4 s); the cuts themselves take the same time.
+  for (const store::Job* j : {&a, &b}) {
+    const std::string cfg_file = (dir_ / (j->id + ".textproto")).string();
+    int st = -1;
+    const std::string sent =
+        capture(bin("smc-cell") + " job show " + j->id + " --config --db " + db_, &st);
+    ASSERT_EQ(st, 0) << sent;
+    std::ofstream(cfg_file) << sent;
+    const std::string out_dir = (dir_ / (j->id + "-sim")).string();
+    // The dynamometer's mill: the paper's (run.sh start --dyno smc2.textproto).
+    const std::string out =
+        capture(bin("smc-edge") + " simulate --quiet --config " + cfg_file + " --mill-model " +
+                    src("cell/models/paper_face_mill.textproto") + " --out " + out_dir + " 2>&1",
+                &st);
+    ASSERT_EQ(st, 0) << out;
+    cfg::RunSummary sim;
+    smc::documents::load(out_dir + "/summary.json", sim);
+    const auto& lc = *j->result;
+    std::printf(
+        "%s %s: LinuxCNC / simulate: passes %u / %u, chatter %u / %u, peak F %.1f / "
+        "%.1f N (F_ref %.1f), cycle %.1f / %.1f s\n",
+        j->id.c_str(), cfg::SmcVariant_Name(j->variant).c_str(), lc.passes_completed(),
+        sim.passes_completed(), lc.chatter_events(), sim.chatter_events(), lc.peak_force_n(),
+        sim.peak_force_n(), sim.force_reference_n(), lc.cycle_time_s(), sim.cycle_time_s());
+    EXPECT_EQ(lc.passes_completed(), sim.passes_completed());
+    EXPECT_EQ(lc.chatter_events(), sim.chatter_events());
+    EXPECT_NEAR(lc.peak_force_n(), sim.peak_force_n(),
+                (sim.chatter_events() > 0 ? 0.10 : 0.05) * sim.force_reference_n());
+    const double extra = lc.cycle_time_s() - sim.cycle_time_s();
+    EXPECT_GE(extra, 0.0);
+    EXPECT_LE(extra, 6.0 + 4.0 * sim.program_rewrites());
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Faults on LinuxCNC: each names its cause, leaves the machine in feed hold
+// (never moving under an adaptive feed nobody supervises) and ends the run.
+// The runs are smc-edge simulate --drive linuxcnc on the paper's job-shop
+// configuration, cut by the virtual dynamometer.
+
+namespace {
+
+class LinuxCncFaults : public LinuxCnc {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() / ("smc-lcnf-" + std::to_string(getpid()));
+    std::filesystem::create_directories(dir_);
+    ::chmod(dir_.c_str(), 0777);
+    int st = -1;
+    const std::string out =
+        capture(src("deploy/linuxcnc/run.sh") + " start --dir " + (dir_ / "cnc").string() +
+                    " --dyno " + src("edge/configs/smc2.textproto"),
+                &st);
+    ASSERT_EQ(st, 0) << out;
+    started_ = true;
+  }
+  // A command as the mill's user; its output (stdout and stderr).
+  std::string as_mill(const std::string& cmd, int* status) {
+    return capture(src("deploy/linuxcnc/run.sh") + " exec " + cmd + " 2>&1", status);
+  }
+  std::string simulate(const std::string& config, const std::string& name, int* status,
+                       int max_time_s = 40) {
+    return as_mill(smc::test::bin_path("smc-edge") +
+                       " simulate --quiet --drive linuxcnc --config " + config + " --max-time " +
+                       std::to_string(max_time_s) + " --out " + (dir_ / name).string() +
+                       " --program-dir " + (dir_ / "programs").string(),
+                   status);
+  }
+  double pin(const std::string& name) {
+    int st = -1;
+    const std::string v = as_mill("halcmd getp " + name, &st);
+    if (v.rfind("TRUE", 0) == 0) return 1;
+    if (v.rfind("FALSE", 0) == 0) return 0;
+    return std::atof(v.c_str());
+  }
+  // Waits until the dynamometer cuts (a tooth in the part), up to 20 s.
+  bool wait_cutting() {
+    for (int i = 0; i < 200; ++i) {
+      if (pin("smc-dyno.teeth-in-cut") > 0) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return false;
+  }
+  void python(const std::string& code) {
+    int st = -1;
+    const std::string out = as_mill(
+        "python3 -c 'import linuxcnc; c = linuxcnc.command(); " + code + "; c.wait_complete(5)'",
+        &st);
+    ASSERT_EQ(st, 0) << out;
+  }
+};
+
+}  // namespace
+
+// E-stop in the cut: the run ends naming it, the feed stays held, and a run
+// started in E-stop is refused before anything moves.
+TEST_F(LinuxCncFaults, EStopMidCutEndsTheRunNamingItAndAJobInEStopIsRefused) {
+  int st = -1;
+  std::string out;
+  std::thread run([&] { out = simulate(src("edge/configs/smc2.textproto"), "estop", &st); });
+  struct Join {
+    std::thread& t;
+    ~Join() {
+      if (t.joinable()) t.join();
+    }
+  } join{run};
+  ASSERT_TRUE(wait_cutting());
+  python("c.state(linuxcnc.STATE_ESTOP)");
+  run.join();
+  EXPECT_EQ(st, 4) << out;
+  EXPECT_NE(out.find("E-stop"), std::string::npos) << out;
+  EXPECT_NE(out.find("the feed is held"), std::string::npos) << out;
+  EXPECT_EQ(pin("motion.current-vel"), 0.0);
+  int st2 = -1;
+  const std::string again = simulate(src("edge/configs/smc2.textproto"), "estop2", &st2);
+  EXPECT_EQ(st2, 2) << again;
+  EXPECT_NE(again.find("LinuxCNC is in E-stop"), std::string::npos) << again;
+}
+
+// The servo records stop (the sampler taken out of the servo thread): within
+// 50 ms the drive holds the feed, LinuxCNC's program is aborted, the run ends
+// naming the cause.
+TEST_F(LinuxCncFaults, StaleServoRecordsHoldTheFeedAndEndTheRun) {
+  int st = -1;
+  std::string out;
+  std::thread run([&] { out = simulate(src("edge/configs/smc2.textproto"), "stale", &st); });
+  struct Join {
+    std::thread& t;
+    ~Join() {
+      if (t.joinable()) t.join();
+    }
+  } join{run};
+  ASSERT_TRUE(wait_cutting());
+  int hs = -1;
+  const std::string h = as_mill("halcmd delf sampler.0 servo-thread", &hs);
+  ASSERT_EQ(hs, 0) << h;
+  run.join();
+  EXPECT_EQ(st, 4) << out;
+  EXPECT_NE(out.find("servo records stopped"), std::string::npos) << out;
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  EXPECT_EQ(pin("motion.current-vel"), 0.0) << "stopped, program aborted";
+}
+
+// NaN on a force pin mid-cut: the core's non-finite-force fault holds the
+// feed; LinuxCNC's axis stands still while the run waits for an operator.
+TEST_F(LinuxCncFaults, ANaNForceHoldsTheFeedOnLinuxCnc) {
+  int st = -1;
+  std::string out;
+  std::thread run([&] { out = simulate(src("edge/configs/smc2.textproto"), "nan", &st, 10); });
+  struct Join {
+    std::thread& t;
+    ~Join() {
+      if (t.joinable()) t.join();
+    }
+  } join{run};
+  ASSERT_TRUE(wait_cutting());
+  int hs = -1;
+  std::string h = as_mill("halcmd unlinkp smc-dyno.force-z", &hs);
+  ASSERT_EQ(hs, 0) << h;
+  h = as_mill("halcmd sets smc-force-z nan", &hs);
+  ASSERT_EQ(hs, 0) << h;
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_EQ(pin("motion.feed-inhibit"), 1.0);
+  EXPECT_EQ(pin("motion.current-vel"), 0.0) << "held in the cut";
+  run.join();  // held until --max-time
+  EXPECT_EQ(st, 3) << out;
+  std::ifstream summary((dir_ / "nan" / "summary.json").string());
+  const std::string json((std::istreambuf_iterator<char>(summary)), {});
+  EXPECT_NE(json.find("non-finite force sample"), std::string::npos) << json;
+}
+
+// A program LinuxCNC refuses (a part longer than the X axis's travel): the
+// run ends with LinuxCNC's own message, and nothing moved along X.
+TEST_F(LinuxCncFaults, AProgramLinuxCncRefusesEndsTheRunWithItsMessage) {
+  auto c = smc::documents::load_supervisor_config(src("edge/configs/smc2.textproto"));
+  c.mutable_milling_model()->mutable_workpiece()->set_length_mm(600);  // X travel ends at 500
+  const std::string file = write("long_part.textproto", smc::documents::to_textproto(c));
+  int st = -1;
+  const std::string out = simulate(file, "refused", &st);
+  EXPECT_NE(st, 0) << out;
+  EXPECT_NE(out.find("LinuxCNC"), std::string::npos) << out;
+  EXPECT_NE(out.find("limit"), std::string::npos) << "LinuxCNC's reason: " << out;
+  EXPECT_LT(pin("joint.0.pos-fb"), 1.0) << "X never went into the part";
 }

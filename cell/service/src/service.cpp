@@ -45,7 +45,7 @@ static_assert(store::kMaxJobIdLength + 12 <= smc::wire::kConfigIdMax);
 static_assert(store::kMaxJobIdLength <= smc::wire::kDocumentKeyMax);
 
 std::string config_id_for(const store::Job& j, uint32_t attempt) {
-  return j.id + "-a" + std::to_string(attempt);
+  return Planner::config_id(j, attempt);
 }
 
 // One cell per database: an exclusive lock on "<db>.lock", held for the

@@ -12,8 +12,10 @@
 #include <string>
 
 #include "registry.hpp"
+#include "smc/cell/planner.hpp"
 #include "smc/cell/store/job_file.hpp"
 #include "smc/cell/store/store.hpp"
+#include "smc/documents/load.hpp"
 
 namespace {
 
@@ -171,6 +173,7 @@ SMC_CELL_COMMAND(job, 20) {
     std::string id;
     std::string db;
     bool gcode = false;
+    bool config = false;
   };
   auto show_args = std::make_shared<ShowArgs>();
   auto* show = job->add_subcommand(
@@ -179,9 +182,26 @@ SMC_CELL_COMMAND(job, 20) {
   add_db_option(show, show_args->db);
   show->add_flag("--gcode", show_args->gcode,
                  "Print only the plan's G-code program (RS274NGC), e.g. to save it as a .ngc file");
+  show->add_flag("--config", show_args->config,
+                 "Print only the supervisor configuration as sent to its machine (text format),\n"
+                 "e.g. to run it again with smc-edge simulate --config")
+      ->excludes("--gcode");
   show->callback([show_args] {
     store::Store s = store::Store::open(show_args->db, store::OpenMode::kExisting);
     const store::Job j = known_job(s, show_args->id);
+    if (show_args->config) {
+      const auto m = j.machine_id.empty() ? std::nullopt : s.machine(j.machine_id);
+      if (!j.plan || !m || j.attempt == 0) {
+        throw Failure(1, j.id + " has not been sent to a machine yet (" +
+                             std::string(store::state_name(j.state)) + " now)");
+      }
+      std::fputs(smc::documents::to_textproto(
+                     smc::cell::Planner::for_machine(*j.plan, *m,
+                                                     smc::cell::Planner::config_id(j, j.attempt)))
+                     .c_str(),
+                 stdout);
+      return;
+    }
     if (show_args->gcode) {
       if (!j.plan || j.plan->program().gcode().empty()) {
         throw Failure(1, j.id + " has no G-code yet: it is rendered when the job is planned (" +

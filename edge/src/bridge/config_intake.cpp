@@ -4,6 +4,7 @@
 
 #include "bridge.hpp"
 #include "smc/documents/load.hpp"
+#include "smc/supervision/gcode.hpp"
 #include "smc/wire/limits.hpp"
 
 namespace smc::edge {
@@ -87,6 +88,13 @@ std::string EdgeService::Impl::check(smc::config::SupervisorConfig& cfg) {
   }
   try {
     EdgeConfig ec = edge_config_from_proto(cfg);
+    if (opt.drive == "linuxcnc") {
+      // The plant is the machine: no model of it is needed, but the
+      // program must render as G-code for it (cutter, part, feed clamp).
+      supervision::FixedProgram p = ec.program;
+      (void)supervision::render_gcode(p, supervision::cut_geometry(cfg));
+      return {};
+    }
     use_mill_model(cfg);
     SimulatedMill probe(cfg.milling_model(), cfg.simulation(), ec.params.sample_period_s);
   } catch (const std::exception& e) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <vector>
 
 #include "commands.hpp"
 #include "smc/documents/load.hpp"
@@ -68,11 +69,16 @@ void print_summary(const smc::config::RunSummary& s, const std::string& out) {
               s.config_id().c_str(), s.completed() ? "completed" : "NOT completed",
               s.cycle_time_s(), s.passes_completed(), s.passes_planned(), s.program_rewrites(),
               s.program_rewrites() == 1 ? "" : "s");
-  std::printf(
-      "  F_ref %.1f N; peak F_Y %.1f N (%+.0f %% of F_ref); peak spindle power %.0f W "
-      "(%+.0f %% of the limit)\n",
-      s.force_reference_n(), s.peak_force_n(), s.peak_force_violation_pct(), s.peak_power_w(),
-      s.peak_power_violation_pct());
+  std::printf("  F_ref %.1f N; peak F_Y %.1f N (%+.0f %% of F_ref); ", s.force_reference_n(),
+              s.peak_force_n(), s.peak_force_violation_pct());
+  if (s.peak_power_w() > 0) {
+    std::printf("peak spindle power %.0f W (%+.0f %% of the limit)\n", s.peak_power_w(),
+                s.peak_power_violation_pct());
+  } else {
+    // A drive without a power signal (LinuxCNC, a replay): only M's estimate.
+    std::printf("spindle power not measured by this drive; steady mean (estimated) %.0f W\n",
+                s.steady_mean_power_w());
+  }
   std::printf("  overshoot %.1f %%; steady-state error %.1f %%; chatter events %u",
               s.overshoot_pct(), s.steady_state_error_pct(), s.chatter_events());
   if (s.chatter_onset_s() >= 0) std::printf("; onset %.2f s", s.chatter_onset_s());
@@ -208,9 +214,22 @@ void add_simulate(CLI::App& app) {
     } catch (const std::runtime_error& e) {
       throw Failure(2, e.what());  // LinuxCNC not ready, or refused the program
     }
+    // On LinuxCNC: the loop's pacing, tick to tick on the wall clock, and the
+    // servo records waiting when a tick starts (allocated before the run).
+    std::vector<double> intervals_ms;
+    int max_backlog = 0;
     if (cnc != nullptr) {
-      opts.before_tick = [cnc] {
+      intervals_ms.reserve(static_cast<std::size_t>(args->max_time_s / cfg.params.sample_period_s) +
+                           1);
+      opts.before_tick = [cnc, &intervals_ms, &max_backlog,
+                          last = std::chrono::steady_clock::time_point{}]() mutable {
         (void)cnc->wait_sample(std::chrono::milliseconds(20));
+        const auto now = std::chrono::steady_clock::now();
+        if (last.time_since_epoch().count() != 0 && intervals_ms.size() < intervals_ms.capacity()) {
+          intervals_ms.push_back(std::chrono::duration<double, std::milli>(now - last).count());
+        }
+        last = now;
+        max_backlog = std::max(max_backlog, cnc->backlog());
         return cnc->fault().empty();
       };
     }
@@ -241,6 +260,18 @@ void add_simulate(CLI::App& app) {
                     static_cast<unsigned long long>(cnc->samples()),
                     static_cast<unsigned long long>(cnc->lost_samples()),
                     static_cast<unsigned long long>(cnc->repeated_samples()));
+        if (!intervals_ms.empty()) {
+          std::sort(intervals_ms.begin(), intervals_ms.end());
+          auto q = [&](double p) {
+            return intervals_ms[std::min(
+                intervals_ms.size() - 1,
+                static_cast<std::size_t>(p * static_cast<double>(intervals_ms.size())))];
+          };
+          std::printf(
+              "  loop paced by the servo thread: tick interval p50 %.3f ms, p99 %.3f ms, "
+              "max %.3f ms; at most %d records waiting\n",
+              q(0.5), q(0.99), intervals_ms.back(), max_backlog);
+        }
       }
       const std::string why = cnc->fault();
       if (!why.empty()) throw Failure(4, "LinuxCNC: " + why + " (the feed is held)");

@@ -67,6 +67,8 @@ class LinuxCncDrive final : public Drive {
   std::uint64_t lost_samples() const noexcept;
   std::uint64_t repeated_samples() const noexcept;
   std::uint64_t samples() const noexcept;
+  // Servo records waiting to be read now.
+  int backlog() const noexcept;
   // The G-code of the last program handed to LinuxCNC.
   std::string last_program_path() const;
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cctype>
 #include <cmath>
 #include <ctime>
 #include <filesystem>
@@ -118,10 +119,22 @@ struct LinuxCncDrive::Impl {
                         : "");
     go.first_pass = first_pass;
     const std::string text = supervision::render_gcode(p, geometry, go);
-    std::filesystem::create_directories(opt.program_dir);
-    std::filesystem::permissions(opt.program_dir, std::filesystem::perms::all,
-                                 std::filesystem::perm_options::add);
-    const std::string path = opt.program_dir + "/" + opt.machine_id + "-r" +
+    // Made readable to LinuxCNC's user when the edge makes it.
+    if (std::filesystem::create_directories(opt.program_dir)) {
+      std::filesystem::permissions(
+          opt.program_dir,
+          std::filesystem::perms::owner_all | std::filesystem::perms::group_read |
+              std::filesystem::perms::group_exec | std::filesystem::perms::others_read |
+              std::filesystem::perms::others_exec,
+          std::filesystem::perm_options::add);
+    }
+    // <machine>-<configuration>-r<revision>-p<first pass>.ngc: one name per
+    // program LinuxCNC ran (a configuration is one job's attempt).
+    std::string cfg_id = config.config_id();
+    for (char& ch : cfg_id) {
+      if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_') ch = '_';
+    }
+    const std::string path = opt.program_dir + "/" + opt.machine_id + "-" + cfg_id + "-r" +
                              std::to_string(p.revision) + "-p" + std::to_string(first_pass + 1) +
                              ".ngc";
     {
@@ -407,5 +420,6 @@ std::uint64_t LinuxCncDrive::samples() const noexcept {
   return impl_->stream ? impl_->stream->records() - impl_->drained : 0;
 }
 std::string LinuxCncDrive::last_program_path() const { return impl_->last_path; }
+int LinuxCncDrive::backlog() const noexcept { return impl_->stream ? impl_->stream->backlog() : 0; }
 
 }  // namespace smc::edge

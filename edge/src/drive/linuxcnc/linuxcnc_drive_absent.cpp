@@ -26,5 +26,6 @@ std::uint64_t LinuxCncDrive::lost_samples() const noexcept { return 0; }
 std::uint64_t LinuxCncDrive::repeated_samples() const noexcept { return 0; }
 std::uint64_t LinuxCncDrive::samples() const noexcept { return 0; }
 std::string LinuxCncDrive::last_program_path() const { return {}; }
+int LinuxCncDrive::backlog() const noexcept { return 0; }
 
 }  // namespace smc::edge

@@ -93,6 +93,11 @@ class Planner {
   // what is missing.
   Plan plan(const PlanInputs& in, const Selection& sel) const;
 
+  // The id of the configuration an attempt of a job runs under:
+  // "<job>-a<attempt>".
+  static std::string config_id(const store::Job& job, uint32_t attempt) {
+    return job.id + "-a" + std::to_string(attempt);
+  }
   // Fills in the machine and gives the configuration its id (at dispatch).
   static smc::config::SupervisorConfig for_machine(const smc::config::SupervisorConfig& plan,
                                                    const store::Machine& machine,
