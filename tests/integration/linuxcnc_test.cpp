@@ -736,3 +736,22 @@ TEST_F(LinuxCncFaults, AProgramLinuxCncRefusesEndsTheRunWithItsMessage) {
   EXPECT_NE(out.find("limit"), std::string::npos) << "LinuxCNC's reason: " << out;
   EXPECT_LT(pin("joint.0.pos-fb"), 1.0) << "X never went into the part";
 }
+
+// The real-time path on LinuxCNC never allocates: the core with the
+// LinuxCNC drive runs the paper's job-shop cut (contact, force control,
+// chatter, the rewrite's hand-over) under an allocation guard, as LinuxCNC's
+// user (smc-linuxcnc-rt-probe).
+TEST_F(LinuxCncFaults, TheLoopOnLinuxCncNeverAllocates) {
+  int st = -1;
+  const std::string json =
+      as_mill(smc::test::bin_path("smc-linuxcnc-rt-probe") + " " +
+                  src("edge/configs/smc2.textproto") + " 14 " + (dir_ / "programs").string(),
+              &st);
+  ASSERT_EQ(st, 0) << json;
+  std::printf("%s", json.c_str());
+  EXPECT_EQ(numbers_after(json, "ticks"), std::vector<double>{28000}) << json;
+  EXPECT_EQ(numbers_after(json, "allocations"), std::vector<double>{0}) << json;
+  EXPECT_EQ(numbers_after(json, "rewrites"), std::vector<double>{1})
+      << "the guard covered a rewrite: " << json;
+  EXPECT_EQ(numbers_after(json, "lost"), std::vector<double>{0}) << json;
+}
