@@ -755,3 +755,39 @@ TEST_F(LinuxCncFaults, TheLoopOnLinuxCncNeverAllocates) {
       << "the guard covered a rewrite: " << json;
   EXPECT_EQ(numbers_after(json, "lost"), std::vector<double>{0}) << json;
 }
+
+// A machine that is not homed refuses the run before anything moves, naming
+// what is missing.
+TEST_F(LinuxCncFaults, AMachineNotHomedIsRefusedBeforeAnythingMoves) {
+  python(
+      "c.mode(linuxcnc.MODE_MANUAL); c.wait_complete(5); c.teleop_enable(0); "
+      "c.wait_complete(5); c.unhome(0)");
+  int st = -1;
+  const std::string out = simulate(src("edge/configs/smc2.textproto"), "unhomed", &st);
+  EXPECT_EQ(st, 2) << out;
+  EXPECT_NE(out.find("not homed"), std::string::npos) << out;
+}
+
+// On the cell's side: a job sent to a LinuxCNC mill in E-stop fails at once
+// with the reason, and the cell keeps it (failed, with its history) -- it is
+// neither lost nor cut.
+TEST_F(LinuxCncCell, AJobForAMillInEStopFailsWithTheReason) {
+  int st = -1;
+  const std::string e = capture(src("deploy/linuxcnc/run.sh") +
+                                    " exec python3 -c 'import linuxcnc; c = linuxcnc.command(); "
+                                    "c.state(linuxcnc.STATE_ESTOP); c.wait_complete(5)' 2>&1",
+                                &st);
+  ASSERT_EQ(st, 0) << e;
+  const std::string id = submit(src("cell/jobs/transfer_line.textproto"));
+  ASSERT_FALSE(id.empty());
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (std::chrono::steady_clock::now() < until && !store::is_terminal(job(id).state)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  const std::string h = history(id);
+  EXPECT_EQ(job(id).state, cfg::JOB_FAILED) << h;
+  EXPECT_NE(h.find("LinuxCNC is in E-stop"), std::string::npos) << h;
+  EXPECT_TRUE(read_watch(watch_file()).empty() ||
+              full_passes(read_watch(watch_file()), "mill-1", -20, 170).empty())
+      << "nothing was cut";
+}
