@@ -594,7 +594,7 @@ TEST_F(LinuxCncCell, ThePapersJobsRunOnLinuxCncAsOnTheSimulatedMill) {
 
 namespace {
 
-class LinuxCncFaults : public LinuxCnc {
+class LinuxCncDyno : public LinuxCnc {
  protected:
   void SetUp() override {
     dir_ = std::filesystem::temp_directory_path() / ("smc-lcnf-" + std::to_string(getpid()));
@@ -648,7 +648,7 @@ class LinuxCncFaults : public LinuxCnc {
 
 // E-stop in the cut: the run ends naming it, the feed stays held, and a run
 // started in E-stop is refused before anything moves.
-TEST_F(LinuxCncFaults, EStopMidCutEndsTheRunNamingItAndAJobInEStopIsRefused) {
+TEST_F(LinuxCncDyno, EStopMidCutEndsTheRunNamingItAndAJobInEStopIsRefused) {
   int st = -1;
   std::string out;
   std::thread run([&] { out = simulate(src("edge/configs/smc2.textproto"), "estop", &st); });
@@ -674,7 +674,7 @@ TEST_F(LinuxCncFaults, EStopMidCutEndsTheRunNamingItAndAJobInEStopIsRefused) {
 // The servo records stop (the sampler taken out of the servo thread): within
 // 50 ms the drive holds the feed, LinuxCNC's program is aborted, the run ends
 // naming the cause.
-TEST_F(LinuxCncFaults, StaleServoRecordsHoldTheFeedAndEndTheRun) {
+TEST_F(LinuxCncDyno, StaleServoRecordsHoldTheFeedAndEndTheRun) {
   int st = -1;
   std::string out;
   std::thread run([&] { out = simulate(src("edge/configs/smc2.textproto"), "stale", &st); });
@@ -697,7 +697,7 @@ TEST_F(LinuxCncFaults, StaleServoRecordsHoldTheFeedAndEndTheRun) {
 
 // NaN on a force pin mid-cut: the core's non-finite-force fault holds the
 // feed; LinuxCNC's axis stands still while the run waits for an operator.
-TEST_F(LinuxCncFaults, ANaNForceHoldsTheFeedOnLinuxCnc) {
+TEST_F(LinuxCncDyno, ANaNForceHoldsTheFeedOnLinuxCnc) {
   int st = -1;
   std::string out;
   std::thread run([&] { out = simulate(src("edge/configs/smc2.textproto"), "nan", &st, 10); });
@@ -725,7 +725,7 @@ TEST_F(LinuxCncFaults, ANaNForceHoldsTheFeedOnLinuxCnc) {
 
 // A program LinuxCNC refuses (a part longer than the X axis's travel): the
 // run ends with LinuxCNC's own message, and nothing moved along X.
-TEST_F(LinuxCncFaults, AProgramLinuxCncRefusesEndsTheRunWithItsMessage) {
+TEST_F(LinuxCncDyno, AProgramLinuxCncRefusesEndsTheRunWithItsMessage) {
   auto c = smc::documents::load_supervisor_config(src("edge/configs/smc2.textproto"));
   c.mutable_milling_model()->mutable_workpiece()->set_length_mm(600);  // X travel ends at 500
   const std::string file = write("long_part.textproto", smc::documents::to_textproto(c));
@@ -741,7 +741,7 @@ TEST_F(LinuxCncFaults, AProgramLinuxCncRefusesEndsTheRunWithItsMessage) {
 // LinuxCNC drive runs the paper's job-shop cut (contact, force control,
 // chatter, the rewrite's hand-over) under an allocation guard, as LinuxCNC's
 // user (smc-linuxcnc-rt-probe).
-TEST_F(LinuxCncFaults, TheLoopOnLinuxCncNeverAllocates) {
+TEST_F(LinuxCncDyno, TheLoopOnLinuxCncNeverAllocates) {
   int st = -1;
   const std::string json =
       as_mill(smc::test::bin_path("smc-linuxcnc-rt-probe") + " " +
@@ -758,7 +758,7 @@ TEST_F(LinuxCncFaults, TheLoopOnLinuxCncNeverAllocates) {
 
 // A machine that is not homed refuses the run before anything moves, naming
 // what is missing.
-TEST_F(LinuxCncFaults, AMachineNotHomedIsRefusedBeforeAnythingMoves) {
+TEST_F(LinuxCncDyno, AMachineNotHomedIsRefusedBeforeAnythingMoves) {
   python(
       "c.mode(linuxcnc.MODE_MANUAL); c.wait_complete(5); c.teleop_enable(0); "
       "c.wait_complete(5); c.unhome(0)");
@@ -790,4 +790,61 @@ TEST_F(LinuxCncCell, AJobForAMillInEStopFailsWithTheReason) {
   EXPECT_TRUE(read_watch(watch_file()).empty() ||
               full_passes(read_watch(watch_file()), "mill-1", -20, 170).empty())
       << "nothing was cut";
+}
+
+// The paper's job-shop run (SMC II) cut by LinuxCNC beside the same run on
+// the simulated mill (smc-edge simulate with and without --drive linuxcnc).
+// Tolerances, and why:
+//  - passes, rewrites: equal;
+//  - chatter detected after the first contact: within 0.2 s (5 revolutions
+//    at 1500 rpm): the same physics grows the same chatter, and E decides
+//    once per revolution; LinuxCNC's feed reaches the part along its own
+//    acceleration ramp, which moves the contact by a fraction of a
+//    revolution;
+//  - overshoot: within 15 points of F_ref: the peak is reached while
+//    chatter grows, and LinuxCNC's hold decelerates (20 ms at 10 mm/s);
+//  - steady-state error of the passes that did not chatter: within 0.5
+//    points;
+//  - cycle time: longer by LinuxCNC's spindle start, approach and the
+//    rewrite's stop, abort, retract and restart, at most 6 s + 4 s.
+// Chatter onset needs the tool's vibration, which only the simulated mill
+// knows, so the detection is compared from contact.
+TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
+  int st = -1;
+  const std::string out = simulate(src("edge/configs/smc2.textproto"), "lcnc", &st, 120);
+  ASSERT_EQ(st, 0) << out;
+  std::printf("%s", out.c_str());
+  const std::string sim_dir = (dir_ / "sim").string();
+  const std::string sim_out =
+      capture(smc::test::bin_path("smc-edge") + " simulate --quiet --config " +
+                  src("edge/configs/smc2.textproto") + " --out " + sim_dir + " 2>&1",
+              &st);
+  ASSERT_EQ(st, 0) << sim_out;
+  cfg::RunSummary lc, sim;
+  smc::documents::load((dir_ / "lcnc" / "summary.json").string(), lc);
+  smc::documents::load(sim_dir + "/summary.json", sim);
+  ASSERT_GT(lc.passes_size(), 0);
+  ASSERT_GT(sim.passes_size(), 0);
+  const double lc_detect = lc.chatter_detected_s() - lc.passes(0).contact_s();
+  const double sim_detect = sim.chatter_detected_s() - sim.passes(0).contact_s();
+  std::printf(
+      "LinuxCNC / simulated: passes %u / %u, rewrites %u / %u, chatter detected %.3f / "
+      "%.3f s after contact, overshoot %.1f / %.1f %%, cycle %.1f / %.1f s\n",
+      lc.passes_completed(), sim.passes_completed(), lc.program_rewrites(), sim.program_rewrites(),
+      lc_detect, sim_detect, lc.overshoot_pct(), sim.overshoot_pct(), lc.cycle_time_s(),
+      sim.cycle_time_s());
+  EXPECT_TRUE(lc.completed());
+  EXPECT_EQ(lc.passes_completed(), sim.passes_completed());
+  EXPECT_EQ(lc.program_rewrites(), sim.program_rewrites());
+  EXPECT_GT(sim_detect, 0);
+  EXPECT_NEAR(lc_detect, sim_detect, 0.2);
+  EXPECT_NEAR(lc.overshoot_pct(), sim.overshoot_pct(), 15.0);
+  for (int i = 0; i < lc.passes_size() && i < sim.passes_size(); ++i) {
+    if (lc.passes(i).chatter() || sim.passes(i).chatter()) continue;
+    EXPECT_NEAR(lc.passes(i).steady_state_error_pct(), sim.passes(i).steady_state_error_pct(), 0.5)
+        << "pass " << i;
+  }
+  const double extra = lc.cycle_time_s() - sim.cycle_time_s();
+  EXPECT_GE(extra, 0.0);
+  EXPECT_LE(extra, 10.0);
 }
