@@ -7,6 +7,8 @@
 #include <signal.h>
 
 #include <chrono>
+#include <cmath>
+#include <complex>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +16,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <random>
 #include <thread>
 
 #include "child_process.hpp"
@@ -524,4 +527,61 @@ TEST_F(Cell, ACommandWithAnUnknownActionIsRefusedByName) {
   EXPECT_NE(last.find("operator command 77 from 'mallory' refused: unknown action 7"),
             std::string::npos)
       << last;
+}
+
+// A structural model from a tap test: the FRF of mill-1's tool (the paper's
+// modes, 2 % noise, in m/N as hammer-test software writes it) fitted by
+// smc-cell model fit-frf into a catalog document, applied, and listed; a
+// base that is not a milling model and a third direction are refused.
+TEST_F(Cell, ATapTestBecomesAStructuralModelThroughTheCatalog) {
+  const std::string csv = (dir_ / "tap.csv").string();
+  {
+    std::ofstream out(csv);
+    out << "frequency_hz,x_real_m_per_n,x_imag_m_per_n,y_real_m_per_n,y_imag_m_per_n\n";
+    std::mt19937 rng(5);
+    std::normal_distribution<double> noise(0.0, 0.02 * 5.1e-7);  // 2 % of the peak (m/N)
+    auto h = [](double wr, double z, double k_n_per_m, double f) {
+      const double s = 2 * M_PI * f / wr;
+      return 1.0 / (k_n_per_m * std::complex<double>(1 - s * s, 2 * z * s));
+    };
+    for (int f = 50; f <= 1500; ++f) {
+      const auto x = h(4500, 0.07, 14e6, f) + std::complex<double>(noise(rng), noise(rng));
+      const auto y = h(4100, 0.11, 14e6, f) + std::complex<double>(noise(rng), noise(rng));
+      out << f << ',' << x.real() << ',' << x.imag() << ',' << y.real() << ',' << y.imag() << '\n';
+    }
+  }
+  const std::string doc = (dir_ / "tap.textproto").string();
+  ASSERT_EQ(
+      run_cmd({bin("smc-cell"), "model", "fit-frf", csv, "--base", "bracket-tl.mill-1.milling",
+               "--id", "bracket-tl.mill-1.tap", "--db", db_, "--out", doc}),
+      0);
+  cfg::Catalog c;
+  smc::documents::load(doc, c);
+  ASSERT_EQ(c.models_size(), 1);
+  const auto& m = c.models(0);
+  EXPECT_EQ(m.provenance(), cfg::PROVENANCE_IDENTIFIED);
+  EXPECT_FALSE(m.validated()) << "a fitted model is validated by evidence, not by its import";
+  ASSERT_EQ(m.milling().structure().tool_x_size(), 1);
+  ASSERT_EQ(m.milling().structure().tool_y_size(), 1);
+  EXPECT_NEAR(m.milling().structure().tool_x(0).natural_frequency_rad_s(), 4500, 45);
+  EXPECT_NEAR(m.milling().structure().tool_x(0).damping_ratio(), 0.07, 0.007);
+  EXPECT_NEAR(m.milling().structure().tool_y(0).natural_frequency_rad_s(), 4100, 41);
+  EXPECT_NEAR(m.milling().structure().tool_y(0).damping_ratio(), 0.11, 0.011);
+  EXPECT_EQ(m.milling().structure().part_x_size(), 1) << "the part's modes are the base's";
+  EXPECT_NE(m.note().find("R^2"), std::string::npos) << m.note();
+  ASSERT_EQ(run_cmd({bin("smc-cell"), "catalog", "apply", doc, "--db", db_, "--author", "test",
+                     "--reason", "tap test of mill-1's tool"}),
+            0);
+  EXPECT_NE(output_of({bin("smc-cell"), "catalog", "list", "model", "--db", db_})
+                .find("bracket-tl.mill-1.tap"),
+            std::string::npos);
+  // Refused, with the reason: a force-process model as the base; a z column.
+  EXPECT_EQ(run_cmd({bin("smc-cell"), "model", "fit-frf", csv, "--base", "bracket-tl.mill-1.force",
+                     "--id", "x", "--db", db_, "--out", doc}),
+            2);
+  const std::string z = (dir_ / "z.csv").string();
+  std::ofstream(z) << "frequency_hz,z_real_m_per_n,z_imag_m_per_n\n";
+  EXPECT_EQ(run_cmd({bin("smc-cell"), "model", "fit-frf", z, "--base", "bracket-tl.mill-1.milling",
+                     "--id", "x", "--db", db_, "--out", doc}),
+            2);
 }

@@ -7,6 +7,9 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,6 +18,7 @@
 #include "smc/cell/store/catalog_docs.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/documents/load.hpp"
+#include "smc/machining/frf.hpp"
 
 namespace {
 
@@ -262,7 +266,9 @@ SMC_CELL_COMMAND(catalog, 22) {
 
 SMC_CELL_COMMAND(model, 23) {
   auto* model = app.add_subcommand(
-      "model", "Process models: validate one with evidence, or mark one suspect with a reason");
+      "model",
+      "Process models: validate one with evidence, mark one suspect with a reason, or fit a\n"
+      "structural model from a tap test");
   model->require_subcommand(1);
   struct Args {
     std::string id, db, author, text;
@@ -305,5 +311,100 @@ SMC_CELL_COMMAND(model, 23) {
       throw Failure(2, e.what());
     }
     std::printf("model %s marked suspect\n", u->id.c_str());
+  });
+
+  struct FitArgs {
+    std::string csv, base, id, on = "tool", db, out;
+    int modes = 2;
+  };
+  auto f = std::make_shared<FitArgs>();
+  auto* fit = model->add_subcommand(
+      "fit-frf",
+      "A structural model from a tap test: fit the modes of a measured frequency response\n"
+      "(CSV: frequency_hz, then D_real_U, D_imag_U for D = x and/or y, U = m_per_n, mm_per_n or\n"
+      "um_per_n) and write a catalog document of a new milling model: the base model with\n"
+      "its structure along the measured directions replaced (not validated). Review it, then\n"
+      "smc-cell catalog apply it");
+  fit->add_option("CSV", f->csv, "The tap test's FRF")->required()->check(CLI::ExistingFile);
+  fit->add_option("--base", f->base, "The milling model whose cutter, part and law it keeps")
+      ->required();
+  fit->add_option("--id", f->id, "The new model's id")->required();
+  fit->add_option("--on", f->on, "What was tapped: tool or part")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"tool", "part"}));
+  fit->add_option("--modes", f->modes, "At most this many modes per direction")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 6));
+  fit->add_option("--out", f->out, "Write the document here (default: standard output)");
+  add_db_option(fit, f->db);
+  fit->callback([f] {
+    auto s = store::Store::open(f->db, store::OpenMode::kExisting);
+    const auto catalog = store::export_catalog(s);
+    const smc::config::CatalogModel* base = nullptr;
+    for (const auto& m : catalog.models()) {
+      if (m.id() == f->base) base = &m;
+    }
+    if (base == nullptr || !base->has_milling()) {
+      throw Failure(2, "--base " + f->base + ": no milling model of that id in " + s.path() +
+                           "; fix: see them with 'smc-cell catalog list model'");
+    }
+    std::map<std::string, smc::machining::Frf> frf;
+    try {
+      frf = smc::machining::read_frf_csv(f->csv);
+    } catch (const std::runtime_error& e) {
+      throw Failure(2, e.what());
+    }
+    smc::config::Catalog doc;
+    auto* m = doc.add_models();
+    *m = *base;
+    m->set_id(f->id);
+    m->set_provenance(smc::config::PROVENANCE_IDENTIFIED);
+    m->set_validated(false);
+    auto* st = m->mutable_milling()->mutable_structure();
+    std::string report;
+    for (const auto& [dir, points] : frf) {
+      if (dir != "x" && dir != "y") {
+        throw Failure(2, f->csv + ": direction '" + dir +
+                             "': the structure has x and y (the feed and its normal); fix: name "
+                             "the columns x_... and y_...");
+      }
+      smc::machining::ModalFit r;
+      try {
+        r = smc::machining::fit_modes(points, f->modes);
+      } catch (const std::invalid_argument& e) {
+        throw Failure(2, f->csv + ": direction '" + dir + "': " + e.what());
+      }
+      auto* modes = f->on == "tool" ? (dir == "x" ? st->mutable_tool_x() : st->mutable_tool_y())
+                                    : (dir == "x" ? st->mutable_part_x() : st->mutable_part_y());
+      modes->Clear();
+      char line[160];
+      std::snprintf(line, sizeof line, "%s_%s: %zu mode%s, R^2 %.4f over %d points", f->on.c_str(),
+                    dir.c_str(), r.modes.size(), r.modes.size() == 1 ? "" : "s", r.r_squared,
+                    r.points);
+      report += std::string(report.empty() ? "" : "; ") + line;
+      std::fprintf(stderr, "%s\n", line);
+      for (const auto& mode : r.modes) {
+        auto* pm = modes->Add();
+        pm->set_natural_frequency_rad_s(mode.natural_frequency_rad_s);
+        pm->set_damping_ratio(mode.damping_ratio);
+        pm->set_stiffness_n_per_mm(mode.stiffness_n_per_mm);
+        std::fprintf(stderr, "  %8.1f Hz  zeta %.4f  k %.0f N/mm\n",
+                     mode.natural_frequency_rad_s / (2 * 3.141592653589793), mode.damping_ratio,
+                     mode.stiffness_n_per_mm);
+      }
+    }
+    m->set_note("structure from the tap test " + std::filesystem::path(f->csv).filename().string() +
+                " (" + report + "); cutter, part and cutting law from " + f->base);
+    const std::string text =
+        "# proto-file: idl/smc_config.proto\n"
+        "# proto-message: smc.config.Catalog\n" +
+        smc::documents::to_textproto(doc);
+    if (f->out.empty()) {
+      std::fputs(text.c_str(), stdout);
+    } else {
+      std::ofstream(f->out) << text;
+      std::fprintf(stderr, "wrote %s: review it, then smc-cell catalog apply %s\n", f->out.c_str(),
+                   f->out.c_str());
+    }
   });
 }
