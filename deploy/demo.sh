@@ -30,7 +30,7 @@ done
 deploy/setup.sh
 echo "== building (ci preset: the same build tree and flags as deploy/test.sh)"
 cmake --preset ci >/dev/null
-targets=(smc-cell smc-edge smc-dashboard)
+targets=(smc-cell smc-edge smc-dashboard smc-mtconnect)
 [[ $linuxcnc -eq 0 ]] || targets+=(smc_dyno)
 cmake --build --preset ci --target "${targets[@]}"
 bin=$root/build/release/bin
@@ -87,6 +87,10 @@ if [[ -x "$bin/smc-dashboard" ]]; then
   echo "== dashboard:     http://127.0.0.1:8080/"
   echo "   operator link: http://127.0.0.1:8080/#token=$token   (feed hold, release, chatter signal)"
 fi
+
+"$bin/smc-mtconnect" --listen 127.0.0.1:7878 --partition "$partition" >"$run/mtconnect.log" 2>&1 &
+pids+=($!)
+echo "== MTConnect adapter: 127.0.0.1:7878 (SHDR; devices: mtconnect/Devices.xml)"
 
 echo "== submitting a transfer-line job and a job-shop job"
 tl=$("$bin/smc-cell" job submit "$root/cell/jobs/transfer_line.textproto" --db "$run/cell.db" | awk '{print $1}')

@@ -79,11 +79,12 @@ class Cell : public ::testing::Test {
                                            "1500"});
   }
   void start_edge(const std::string& machine,
-                  const std::string& mill_model = "cell/models/paper_face_mill.textproto") {
+                  const std::string& mill_model = "cell/models/paper_face_mill.textproto",
+                  const std::string& speedup = "8") {
     edges_[machine].reset();
     edges_[machine].emplace(std::vector<std::string>{
         bin("smc-edge"), "--log-level", "warn", "run", "--machine", machine, "--partition",
-        partition_, "--speedup", "8", "--lease-ms", "1000", "--no-realtime", "--mill-model",
+        partition_, "--speedup", speedup, "--lease-ms", "1000", "--no-realtime", "--mill-model",
         src(mill_model), "--state-file", (dir_ / (machine + ".journal")).string()});
   }
   std::string submit(const std::string& file) {
@@ -584,4 +585,154 @@ TEST_F(Cell, ATapTestBecomesAStructuralModelThroughTheCatalog) {
   EXPECT_EQ(run_cmd({bin("smc-cell"), "model", "fit-frf", z, "--base", "bracket-tl.mill-1.milling",
                      "--id", "x", "--db", db_, "--out", doc}),
             2);
+}
+
+// ---------------------------------------------------------------------------
+// The cell as an MTConnect adapter (smc-mtconnect), read by an independent
+// SHDR reader (tests/integration/shdr_reader.py: Python, from the protocol
+// and the shipped Devices.xml, none of the project's code).
+
+namespace {
+
+// The value of "key": in one JSON line of the reader ("" when absent).
+std::string json_field(const std::string& line, const std::string& key) {
+  const std::string k = "\"" + key + "\": ";
+  const auto p = line.find(k);
+  if (p == std::string::npos) return {};
+  auto v = p + k.size();
+  if (line[v] == '"') {
+    const auto e = line.find('"', v + 1);
+    return line.substr(v + 1, e - v - 1);
+  }
+  const auto e = line.find_first_of(",}", v);
+  return line.substr(v, e - v);
+}
+
+std::vector<std::string> lines_of(const std::string& path) {
+  std::vector<std::string> out;
+  std::ifstream in(path);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+}  // namespace
+
+TEST_F(Cell, AnMTConnectAgentSeesExecutionAndConditionsWithin100Ms) {
+  // The shipped device file is the generated one.
+  const std::string devices = src("mtconnect/Devices.xml");
+  std::ifstream shipped(devices);
+  const std::string shipped_xml((std::istreambuf_iterator<char>(shipped)), {});
+  EXPECT_EQ(output_of({bin("smc-mtconnect"), "devices", "--machines", "mill-1,mill-2"}),
+            shipped_xml);
+
+  start_cell();
+  start_edge("mill-1", "cell/models/paper_face_mill.textproto", "2");
+  smc::test::ChildProcess adapter({bin("smc-mtconnect"), "--log-level", "warn", "--listen",
+                                   "127.0.0.1:0", "--partition", partition_});
+  const auto first = adapter.read_line();
+  ASSERT_TRUE(first && first->rfind("listening on port ", 0) == 0) << first.value_or("(none)");
+  const std::string port = first->substr(std::string("listening on port ").size());
+  auto reader = [&](const std::string& out, const std::string& seconds) {
+    return smc::test::ChildProcess(
+        {"/bin/sh", "-c",
+         "exec /usr/bin/python3 " + src("tests/integration/shdr_reader.py") + " --port " + port +
+             " --devices " + devices + " --duration " + seconds + " > " + out});
+  };
+  const std::string log1 = (dir_ / "agent1.jsonl").string();
+  auto agent1 = reader(log1, "90");
+  const double t_connect =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+
+  // A job-shop job (SMC II: chatter, suppression) with operator feed holds
+  // and releases during the cut.
+  smc::transport::Participant p({.partition = partition_});
+  smc::transport::Topic<smc_data_OperatorCommand> topic(p);
+  smc::transport::Writer<smc_data_OperatorCommand> commands(topic);
+  const std::string js = submit("cell/jobs/job_shop.json");
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+  ASSERT_TRUE(commands.wait_for_readers(1, std::chrono::seconds(10)));
+  std::this_thread::sleep_for(3s);  // into the cut (contact at ~0.5 s of machine time)
+  for (uint64_t i = 0; i < 20; ++i) {
+    smc_data_OperatorCommand c{};
+    smc::wire::set_string(c.machine_id, "mill-1");
+    smc::wire::set_string(c.operator_name, "test");
+    c.command_id = 2 * i + 1;
+    c.action = smc_data_OP_FEED_HOLD_ON;
+    commands.write(c);
+    std::this_thread::sleep_for(150ms);
+    c.command_id = 2 * i + 2;
+    c.action = smc_data_OP_FEED_HOLD_OFF;
+    commands.write(c);
+    std::this_thread::sleep_for(150ms);
+  }
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
+  EXPECT_EQ(job(js)->state, cfg::JOB_DONE);
+  std::this_thread::sleep_for(500ms);
+  agent1.kill(SIGTERM);
+  agent1.wait();
+
+  // A second agent connecting now gets every current value at once.
+  const std::string log2 = (dir_ / "agent2.jsonl").string();
+  auto agent2 = reader(log2, "2");
+  agent2.wait();
+
+  std::map<std::string, std::vector<std::string>> seen;  // item -> values in order
+  std::vector<double> latency;
+  int pongs = 0, errors = 0;
+  for (const auto& l : lines_of(log1)) {
+    if (!json_field(l, "error").empty()) {
+      ++errors;
+      ADD_FAILURE() << l;
+      continue;
+    }
+    if (!json_field(l, "pong").empty()) {
+      ++pongs;
+      continue;
+    }
+    const std::string item = json_field(l, "item");
+    const std::string v = item == "chatter" || item == "edge_fault"
+                              ? json_field(l, "condition") + ":" + json_field(l, "native_code")
+                              : json_field(l, "value");
+    if (json_field(l, "device") != "mill-1") continue;
+    auto& vs = seen[item];
+    if (vs.empty() || vs.back() != v) vs.push_back(v);
+    const double ts = std::stod(json_field(l, "ts")), recv = std::stod(json_field(l, "recv"));
+    // Changes of execution and conditions after the first agent's start-up.
+    if ((item == "exec" || item == "chatter") && ts > t_connect + 1.0) latency.push_back(recv - ts);
+  }
+  EXPECT_EQ(errors, 0);
+  EXPECT_GT(pongs, 5) << "heartbeats answered";
+  auto has = [&](const std::string& item, const std::string& v) {
+    const auto& vs = seen[item];
+    return std::find(vs.begin(), vs.end(), v) != vs.end();
+  };
+  EXPECT_TRUE(has("avail", "AVAILABLE"));
+  EXPECT_TRUE(has("exec", "ACTIVE"));
+  EXPECT_TRUE(has("exec", "FEED_HOLD"));
+  EXPECT_TRUE(has("exec", "PROGRAM_COMPLETED"));
+  EXPECT_TRUE(has("chatter", "WARNING:CHATTER_AUTOMATIC"));
+  EXPECT_TRUE(has("chatter", "NORMAL:"));
+  EXPECT_TRUE(has("block", "pass 1 of 2"));
+  ASSERT_FALSE(seen["smc"].empty());
+  EXPECT_NE(seen["smc"].back().find("SMC II"), std::string::npos) << seen["smc"].back();
+  ASSERT_FALSE(seen["Srpm"].empty());
+  EXPECT_NEAR(std::stod(seen["Srpm"].back()), 1500, 15);
+  ASSERT_GE(latency.size(), 40u) << "40 holds and releases, chatter";
+  std::sort(latency.begin(), latency.end());
+  const double p50 = latency[latency.size() / 2];
+  const double p99 = latency[std::min(latency.size() - 1, latency.size() * 99 / 100)];
+  std::printf(
+      "MTConnect: %zu execution and condition changes, edge write -> agent: p50 %.1f ms, "
+      "p99 %.1f ms, max %.1f ms\n",
+      latency.size(), 1e3 * p50, 1e3 * p99, 1e3 * latency.back());
+  EXPECT_LT(p99, 0.100);
+
+  std::map<std::string, std::string> now;
+  for (const auto& l : lines_of(log2)) {
+    if (json_field(l, "device") == "mill-1") now[json_field(l, "item")] = json_field(l, "value");
+  }
+  EXPECT_EQ(now["exec"], "PROGRAM_COMPLETED") << "a reconnecting agent gets the current values";
+  EXPECT_EQ(now["avail"], "AVAILABLE");
 }

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -74,6 +75,18 @@ class ChildProcess {
       }
     }
     return false;
+  }
+
+  // The next line of stdout (without its newline), or nothing at EOF.
+  std::optional<std::string> read_line() {
+    std::string cur;
+    char c;
+    while (::read(out_, &c, 1) == 1) {
+      if (c == '\n') return cur;
+      cur.push_back(c);
+    }
+    if (cur.empty()) return std::nullopt;
+    return cur;
   }
 
   void kill(int sig) {
