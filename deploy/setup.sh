@@ -15,8 +15,8 @@ packages=(
   # libraries
   libeigen3-dev libprotobuf-dev protobuf-compiler libspdlog-dev libsqlite3-dev
   zlib1g-dev libcli11-dev
-  # tests and benchmarks
-  libgtest-dev libgmock-dev libbenchmark-dev sqlite3
+  # tests and benchmarks; clang with libFuzzer for the fuzz targets (deploy/fuzz.sh)
+  libgtest-dev libgmock-dev libbenchmark-dev sqlite3 clang libclang-rt-14-dev
   # benchmarks: cyclictest beside the edge loop
   rt-tests
   # dashboard: Boost.Beast (headers), the page's npm packages, the browser test

@@ -25,6 +25,14 @@ cmake --build --preset ci
 echo "== tests"
 ctest --preset ci "$@"
 
+# Every decoder that takes outside input, fuzzed: its kept crashes replayed,
+# then 20,000 inputs per target from the shipped files with a fixed seed (the
+# same inputs every run); the long run is deploy/fuzz.sh --seconds 3600.
+if [[ $# -eq 0 ]]; then
+  echo "== fuzzing (20,000 inputs per target)"
+  deploy/fuzz.sh --runs 20000
+fi
+
 # The cell as containers on an internal network, with faults (or, where
 # podman cannot run, one network namespace per service; it says which).
 if [[ $# -eq 0 ]]; then

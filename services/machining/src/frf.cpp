@@ -267,8 +267,15 @@ ModalFit fit_peaks(const Frf& frf, const std::vector<double>& mag,
 }  // namespace
 
 std::map<std::string, Frf> read_frf_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot read");
+  std::ifstream file(path);
+  if (!file) throw std::runtime_error(path + ": cannot read");
+  std::ostringstream text;
+  text << file.rdbuf();
+  return parse_frf_csv(text.str(), path);
+}
+
+std::map<std::string, Frf> parse_frf_csv(const std::string& text, const std::string& path) {
+  std::istringstream in(text);
   std::string line;
   if (!std::getline(in, line)) throw std::runtime_error(path + ":1: empty file; fix: a header row");
   auto split = [](const std::string& s) {

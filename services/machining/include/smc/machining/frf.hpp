@@ -55,5 +55,7 @@ ModalFit fit_modes(const Frf& frf, int max_modes = 3, double min_peak_share = 0.
 // Returns each direction's FRF in mm/N. Throws std::runtime_error
 // "FILE:LINE: ..." naming the column and the fix.
 std::map<std::string, Frf> read_frf_csv(const std::string& path);
+// The same, from the file's text (`path` names it in messages).
+std::map<std::string, Frf> parse_frf_csv(const std::string& text, const std::string& path);
 
 }  // namespace smc::machining
