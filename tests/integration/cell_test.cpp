@@ -249,6 +249,47 @@ TEST_F(Cell, ChatterUnderSmcIMarksItsModelsSuspectAndThePartMovesToAMachineWhose
   EXPECT_EQ(c.variant, cfg::SMC_II) << c.explanation;
   EXPECT_EQ(c.machine_id, "mill-1");
   EXPECT_NE(c.explanation.find("is suspect"), std::string::npos) << c.explanation;
+
+  // The cuts' stability evidence: mill-1 chattered at the planned 1 mm,
+  // which contradicts its milling model's 1.84 mm; mill-2 cut 1 mm clean,
+  // which its model allows.
+  const std::string shown = output_of({bin("smc-cell"), "part", "show", "bracket-tl", "--db", db_});
+  const auto on1 = shown.find("on mill-1, tool fm-r25-4t, at 1500 rpm");
+  const auto on2 = shown.find("on mill-2, tool fm-r25-4t, at 1500 rpm");
+  ASSERT_NE(on1, std::string::npos) << shown;
+  ASSERT_NE(on2, std::string::npos) << shown;
+  const std::string mill1 = shown.substr(on1, on2 - on1);
+  EXPECT_NE(mill1.find("chatter at 1.00 mm"), std::string::npos) << mill1;
+  EXPECT_NE(mill1.find("CONTRADICTED: chatter at 1.00 mm"), std::string::npos) << mill1;
+  const std::string mill2 = shown.substr(on2, shown.find("  jobs", on2) - on2);
+  EXPECT_NE(mill2.find("cut without chatter to 1.00 mm"), std::string::npos) << mill2;
+  EXPECT_NE(mill2.find("consistent with the clean cut"), std::string::npos) << mill2;
+  EXPECT_EQ(mill2.find("CONTRADICTED"), std::string::npos) << mill2;
+}
+
+// A job-shop part (no models) cut once under SMC II: the 2 mm pass chatters,
+// the two 1 mm passes do not, so the part's evidence puts the stability
+// limit of mill-1 at 1500 rpm in (1, 2] mm.
+TEST_F(Cell, ThePartsCutsBoundItsStabilityLimit) {
+  start_cell();
+  start_edge("mill-1");
+  const std::string js = submit("cell/jobs/job_shop.json");
+  ASSERT_TRUE(wait_jobs(
+      {js}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
+  ASSERT_EQ(job(js)->state, cfg::JOB_DONE);
+  const std::string shown = output_of({bin("smc-cell"), "part", "show", "housing-js", "--db", db_});
+  EXPECT_NE(shown.find("on mill-1, tool fm-r25-4t, at 1500 rpm (1 job)"), std::string::npos)
+      << shown;
+  EXPECT_NE(shown.find("cut without chatter to 1.00 mm"), std::string::npos) << shown;
+  EXPECT_NE(shown.find("chatter at 2.00 mm (750 Hz)"), std::string::npos) << shown;
+  EXPECT_NE(shown.find("the stability limit lies in (1.00, 2.00] mm"), std::string::npos) << shown;
+  auto db = store::Store::open(db_, store::OpenMode::kExisting);
+  const auto ev = db.stability_evidence("housing-js");
+  ASSERT_EQ(ev.size(), 2u) << "one chatter point, one chatter-free depth";
+  EXPECT_TRUE(ev[0].chatter);
+  EXPECT_DOUBLE_EQ(ev[0].width_mm, 48);
+  EXPECT_FALSE(ev[1].chatter);
+  EXPECT_GE(ev[1].revolutions, 20u);
 }
 
 // A machine added to a running cell with `smc-cell catalog apply` takes jobs

@@ -121,8 +121,22 @@ struct CellService::Impl {
   std::map<std::string, Mill> mills;
   std::map<std::string, Progress> progress;                             // by job id
   std::map<std::string, std::vector<machining::ForceSample>> learning;  // by job id
-  std::set<std::string> chatter_seen;                                   // "<machine>#<event id>"
-  std::set<std::string> retired;              // machines that take no new jobs
+  // Stability evidence: per machine its latest revolution and the job it
+  // cuts; per job the chatter-free cuts seen (by speed and depth) and the
+  // depths at which it chattered.
+  struct StableCut {
+    double rpm = 0, depth_mm = 0, feed_per_tooth_mm = 1e9;
+    std::uint32_t revolutions = 0;
+  };
+  struct JobEvidence {
+    std::map<std::pair<long, long>, StableCut> stable;  // (rpm, depth in µm)
+    std::vector<std::pair<double, double>> chatter;     // (rpm, depth)
+  };
+  std::map<std::string, smc_data_ForceSummary> last_summary;  // by machine
+  std::map<std::string, std::string> cutting;                 // machine -> job
+  std::map<std::string, JobEvidence> evidence;                // by job id
+  std::set<std::string> chatter_seen;                         // "<machine>#<event id>"
+  std::set<std::string> retired;                              // machines that take no new jobs
   std::map<std::string, std::string> out_on;  // machine -> job whose assignment was sent
   int64_t data_version = -1;
   Clock::time_point started = Clock::now();
@@ -471,6 +485,11 @@ struct CellService::Impl {
       pr.chatter = std::max(pr.chatter, p.chatter_events);
       pr.peak_force = p.peak_force_n;
       const std::string msg = get_string(p.message);
+      if (p.phase == smc_data_JOB_RUNNING) cutting[j->machine_id] = job_id;
+      if (p.phase == smc_data_JOB_DONE || p.phase == smc_data_JOB_FAILED ||
+          p.phase == smc_data_JOB_INTERRUPTED) {
+        record_stable_cuts(*j);
+      }
       switch (p.phase) {
         case smc_data_JOB_RUNNING:
           if (j->state == cfg::JOB_ASSIGNED)
@@ -577,13 +596,81 @@ struct CellService::Impl {
       spdlog::warn("job {}: models {} marked suspect", j->id, ids);
     }
     db.note_event(j->id, reason);
+    record_chatter_point(*j, machine, automatic ? double{e.frequency_hz} : 0.0);
+  }
+
+  // ------------------------------------------------ stability evidence --
+
+  store::StabilityEvidence evidence_for(const store::Job& j) {
+    store::StabilityEvidence e;
+    e.part_id = j.spec.part_id();
+    e.machine_id = j.machine_id;
+    e.tool_id = j.spec.tool_id();
+    e.job_id = j.id;
+    if (const auto part = db.part(j.spec.part_id())) e.width_mm = part->width_mm;
+    return e;
+  }
+
+  // Chatter at the speed, depth and feed of the machine's last revolution
+  // (the one the detector decided on).
+  void record_chatter_point(const store::Job& j, const std::string& machine, double hz) {
+    const auto it = last_summary.find(machine);
+    if (it == last_summary.end() || !(it->second.depth_mm > 0)) return;
+    store::StabilityEvidence e = evidence_for(j);
+    e.spindle_rpm = it->second.spindle_rpm;
+    e.depth_mm = it->second.depth_mm;
+    e.feed_per_tooth_mm = it->second.feed_per_tooth_mm;
+    e.chatter = true;
+    e.frequency_hz = hz;
+    db.add_stability_evidence(e);
+    evidence[j.id].chatter.emplace_back(e.spindle_rpm, e.depth_mm);
+  }
+
+  // At the end of a job: each depth it cut without chatter for at least 20
+  // revolutions, unless it chattered at that speed at that depth or
+  // shallower (the detector decides a few revolutions after onset, so the
+  // revolutions just before a detection were not stable).
+  void record_stable_cuts(const store::Job& j) {
+    const auto it = evidence.find(j.id);
+    if (it == evidence.end()) return;
+    for (const auto& [key, c] : it->second.stable) {
+      bool contradicted = false;
+      for (const auto& [rpm, depth] : it->second.chatter) {
+        contradicted = contradicted || (std::fabs(rpm - c.rpm) < 1 && depth <= c.depth_mm + 1e-6);
+      }
+      if (c.revolutions < 20 || contradicted) continue;
+      store::StabilityEvidence e = evidence_for(j);
+      e.spindle_rpm = c.rpm;
+      e.depth_mm = c.depth_mm;
+      e.feed_per_tooth_mm = c.feed_per_tooth_mm;
+      e.revolutions = c.revolutions;
+      db.add_stability_evidence(e);
+    }
+    evidence.erase(it);
+    for (auto m = cutting.begin(); m != cutting.end();) {
+      m = m->second == j.id ? cutting.erase(m) : std::next(m);
+    }
   }
 
   // ---------------------------------------------------------- learning --
 
   void take_summaries() {
     summary_reader.take([&](const smc_data_ForceSummary& s, const tr::SampleInfo& info) {
-      if (!opt.learn || !info.valid_data || !s.in_contact || s.chatter) return;
+      if (!info.valid_data) return;
+      const std::string machine = get_string(s.machine_id);
+      last_summary[machine] = s;
+      if (s.in_contact && !s.chatter && s.depth_mm > 0 && s.spindle_rpm > 0) {
+        if (auto it = cutting.find(machine); it != cutting.end()) {
+          auto& c =
+              evidence[it->second]
+                  .stable[{std::lround(s.spindle_rpm), std::lround(1000.0 * double{s.depth_mm})}];
+          c.rpm = s.spindle_rpm;
+          c.depth_mm = s.depth_mm;
+          c.feed_per_tooth_mm = std::min(c.feed_per_tooth_mm, double{s.feed_per_tooth_mm});
+          ++c.revolutions;
+        }
+      }
+      if (!opt.learn || !s.in_contact || s.chatter) return;
       if (!(s.f_y_peak_n > 0) || !(s.feed_per_tooth_mm > 0) || !(s.depth_mm > 0)) return;
       // Settled revolutions only: the cutter fully in the part and the
       // controller at its reference (entry, exit and transients mix the

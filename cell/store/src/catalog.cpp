@@ -386,6 +386,44 @@ void Store::record_catalog_event(const std::string& kind, const std::string& ent
       .run();
 }
 
+void Store::add_stability_evidence(const StabilityEvidence& e) {
+  Stmt(db_.get(), path_,
+       "INSERT INTO stability_evidence (time_ms, part_id, machine_id, tool_id, job_id, "
+       "spindle_rpm, depth_mm, width_mm, feed_per_tooth_mm, chatter, frequency_hz, revolutions) "
+       "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)")
+      .bind(detail::now_ms(), e.part_id, e.machine_id, e.tool_id, e.job_id, e.spindle_rpm,
+            e.depth_mm, e.width_mm, e.feed_per_tooth_mm, e.chatter ? 1 : 0, e.frequency_hz,
+            static_cast<std::int64_t>(e.revolutions))
+      .run();
+}
+
+std::vector<StabilityEvidence> Store::stability_evidence(const std::string& part_id) {
+  Stmt s(db_.get(), path_,
+         "SELECT seq, time_ms, part_id, machine_id, tool_id, job_id, spindle_rpm, depth_mm, "
+         "width_mm, feed_per_tooth_mm, chatter, frequency_hz, revolutions FROM stability_evidence "
+         "WHERE part_id = ? ORDER BY seq");
+  s.bind(part_id);
+  std::vector<StabilityEvidence> out;
+  while (s.step()) {
+    StabilityEvidence e;
+    e.seq = s.int64(0);
+    e.time_ms = s.int64(1);
+    e.part_id = s.text(2);
+    e.machine_id = s.text(3);
+    e.tool_id = s.text(4);
+    e.job_id = s.text(5);
+    e.spindle_rpm = s.real(6);
+    e.depth_mm = s.real(7);
+    e.width_mm = s.real(8);
+    e.feed_per_tooth_mm = s.real(9);
+    e.chatter = s.int64(10) != 0;
+    e.frequency_hz = s.real(11);
+    e.revolutions = static_cast<std::uint32_t>(s.int64(12));
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
 std::vector<CatalogEvent> Store::history(const std::string& kind, const std::string& entity_id) {
   Stmt s(
       db_.get(), path_,

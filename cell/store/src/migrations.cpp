@@ -163,6 +163,29 @@ BEGIN SELECT RAISE(ABORT, 'catalog_history is append-only'); END;
 CREATE TRIGGER catalog_history_append_only_delete BEFORE DELETE ON catalog_history
 BEGIN SELECT RAISE(ABORT, 'catalog_history is append-only'); END;
 )sql"},
+    Migration{4, "stability evidence from cuts", R"sql(
+-- What cuts showed about stability, per part, machine and tool (append-only):
+-- a chatter event at its speed, depth, width and feed; a chatter-free pass
+-- with the revolutions it was cut for.
+CREATE TABLE stability_evidence (
+  seq               INTEGER PRIMARY KEY AUTOINCREMENT,
+  time_ms           INTEGER NOT NULL,
+  part_id           TEXT NOT NULL,
+  machine_id        TEXT NOT NULL,
+  tool_id           TEXT NOT NULL,
+  job_id            TEXT NOT NULL,
+  spindle_rpm       REAL NOT NULL,
+  depth_mm          REAL NOT NULL,
+  width_mm          REAL NOT NULL,
+  feed_per_tooth_mm REAL NOT NULL,
+  chatter           INTEGER NOT NULL CHECK (chatter IN (0, 1)),
+  frequency_hz      REAL NOT NULL DEFAULT 0,
+  revolutions       INTEGER NOT NULL DEFAULT 0
+);
+CREATE INDEX stability_evidence_by_part ON stability_evidence (part_id, machine_id, tool_id);
+CREATE TRIGGER stability_evidence_append_only_update BEFORE UPDATE ON stability_evidence
+BEGIN SELECT RAISE(ABORT, 'stability_evidence is append-only'); END;
+)sql"},
 };
 
 }  // namespace

@@ -87,6 +87,25 @@ struct ProcessModel {
   std::int64_t retired_at_ms = 0;       // 0: in use
 };
 
+// What one cut showed about stability (Store::add_stability_evidence). A
+// chatter event is a point at or above the stability limit at its speed; a
+// pass cut without chatter for `revolutions` revolutions one below it.
+struct StabilityEvidence {
+  std::int64_t seq = 0;  // assigned by the store
+  std::int64_t time_ms = 0;
+  std::string part_id;
+  std::string machine_id;
+  std::string tool_id;
+  std::string job_id;
+  double spindle_rpm = 0;
+  double depth_mm = 0;
+  double width_mm = 0;
+  double feed_per_tooth_mm = 0;
+  bool chatter = false;
+  double frequency_hz = 0;        // chatter: the detector's frequency (0: signalled by hand)
+  std::uint32_t revolutions = 0;  // chatter-free: revolutions cut at this depth
+};
+
 // One change to the catalog (Store::history).
 struct CatalogEvent {
   std::int64_t seq = 0;

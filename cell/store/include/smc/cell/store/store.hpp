@@ -145,6 +145,12 @@ class Store {
   // arguments), oldest first.
   std::vector<CatalogEvent> history(const std::string& kind = {},
                                     const std::string& entity_id = {});
+
+  // What cuts showed about stability (append-only): a chatter event bounds
+  // the stable depth from above at its speed, a chatter-free pass from below.
+  void add_stability_evidence(const StabilityEvidence& e);
+  // A part's evidence, oldest first.
+  std::vector<StabilityEvidence> stability_evidence(const std::string& part_id);
   // Retires a machine, tool, material, part or model (kind as in the
   // history): it stays in the database for the jobs that used it, and new
   // jobs and plans refuse it; a retired machine's planned jobs are planned
