@@ -32,6 +32,8 @@ struct SimulateArgs {
   double feed_lag_ms = -1;  // < 0: as the configuration says
   double plant_gain = 1;
   double runout_um = 0;
+  std::vector<std::string> breaks;
+  double wear_per_m = -1;
   bool quiet = false;
   std::string drive = "sim";
   std::string program_dir = "/tmp/smc-programs";
@@ -137,6 +139,12 @@ void add_simulate(CLI::App& app) {
                   "micrometres (tooth 0 furthest out), the teeth cutting unequal chips; 0: none")
       ->check(CLI::Range(0.0, smc::machining::kMaxRunoutUm))
       ->capture_default_str();
+  sub->add_option("--break-tooth", args->breaks,
+                  "Tooth T (1-based) breaks at S s of machine time: T@S loses its edge, T@S:MM\n"
+                  "chips MM mm of it (repeatable), e.g. --break-tooth 2@12.5");
+  sub->add_option("--wear-per-m", args->wear_per_m,
+                  "The cutting pressures grow by this share per metre of cut (e.g. 0.05)")
+      ->check(CLI::Range(0.0, 10.0));
   sub->add_flag("--quiet", args->quiet, "Print nothing but errors");
   sub->add_option("--drive", args->drive,
                   "sim (the simulated mill, virtual time) or linuxcnc (the running LinuxCNC, real\n"
@@ -170,6 +178,23 @@ void add_simulate(CLI::App& app) {
         cutter->add_radial_runout_um(r);
       }
     }
+    for (const auto& spec : args->breaks) {
+      // T@S or T@S:MM
+      unsigned tooth = 0;
+      double at = -1, loss = 0;
+      int used = 0;
+      const int n = std::sscanf(spec.c_str(), "%u@%lf%n:%lf%n", &tooth, &at, &used, &loss, &used);
+      if (n < 2 || used != static_cast<int>(spec.size()) || tooth == 0 || !(at >= 0) ||
+          !(loss >= 0)) {
+        throw Failure(2, "--break-tooth " + spec + ": give T@S or T@S:MM (tooth from 1, time " +
+                             "in s, edge lost in mm), e.g. 2@12.5 or 2@12.5:0.05");
+      }
+      auto* b = raw.mutable_simulation()->add_tooth_breaks();
+      b->set_tooth(tooth);
+      b->set_at_s(at);
+      b->set_edge_loss_mm(loss);
+    }
+    if (args->wear_per_m >= 0) raw.mutable_simulation()->set_wear_per_m(args->wear_per_m);
     RunOptions opts;
     opts.max_time_s = args->max_time_s;
     for (const auto& spec : args->feed_holds) {
@@ -185,7 +210,7 @@ void add_simulate(CLI::App& app) {
     try {
       if (args->drive == "linuxcnc") {
         if (!args->replay.empty() || !args->mill_model.empty() || args->plant_gain != 1 ||
-            args->runout_um > 0) {
+            args->runout_um > 0 || !args->breaks.empty() || args->wear_per_m >= 0) {
           throw Failure(2,
                         "--drive linuxcnc: the plant is LinuxCNC's (its dynamometer: "
                         "run.sh start --dyno CONFIG [--plant MODEL]); --replay, --mill-model, "

@@ -50,6 +50,17 @@ struct SimulatedMill::Impl {
   double lag_gain = 1;        // 1 - exp(-dt / lag) per sample; 1 = no lag
   double time_s = 0;
   double start_x = 0;
+  // Tool condition: breaks in time order, the cutter's own runout, wear.
+  struct Break {
+    int tooth = 0;  // 0-based
+    double at_s = 0, loss_mm = 1;
+  };
+  std::vector<Break> breaks;
+  std::size_t next_break = 0;
+  std::vector<double> runout_mm;  // as built
+  double wear_per_mm = 0;
+  double cut_length_mm = 0;
+  double worn_at_mm = 0;  // cut length at the last wear update
 
   Impl(machining::MillingModel m, const smc::config::SimulatedMill& o, double period_s)
       : model(std::move(m)),
@@ -142,6 +153,29 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
     if (y >= y_lo && y <= y_hi) s.band_cos.push_back(std::cos(th));
   }
   s.start_x = -s.radius() - (sim.approach_mm() > 0 ? sim.approach_mm() : 5.0);
+  const int teeth = s.model.cutter.teeth;
+  for (int i = 0; i < teeth; ++i) s.runout_mm.push_back(s.sim.tooth_runout_mm(i));
+  for (int k = 0; k < sim.tooth_breaks_size(); ++k) {
+    const auto& b = sim.tooth_breaks(k);
+    const std::string f = "simulation.tooth_breaks[" + std::to_string(k) + "]";
+    if (b.tooth() < 1 || static_cast<int>(b.tooth()) > teeth) {
+      throw ConfigError(f + ".tooth: " + std::to_string(b.tooth()) + " is not a tooth of the " +
+                        std::to_string(teeth) + "-tooth cutter (1-based)");
+    }
+    if (!(b.at_s() >= 0) || !(b.edge_loss_mm() >= 0) || !std::isfinite(b.edge_loss_mm())) {
+      throw ConfigError(f +
+                        ": at_s and edge_loss_mm must be >= 0 (edge_loss_mm 0: the edge is "
+                        "lost, 1 mm)");
+    }
+    s.breaks.push_back(
+        {static_cast<int>(b.tooth()) - 1, b.at_s(), b.edge_loss_mm() > 0 ? b.edge_loss_mm() : 1.0});
+  }
+  std::stable_sort(s.breaks.begin(), s.breaks.end(),
+                   [](const Impl::Break& a, const Impl::Break& b) { return a.at_s < b.at_s; });
+  if (!(sim.wear_per_m() >= 0) || !std::isfinite(sim.wear_per_m())) {
+    throw ConfigError("simulation.wear_per_m: must be >= 0 (0: no wear)");
+  }
+  s.wear_per_mm = sim.wear_per_m() / 1000.0;
 }
 
 SimulatedMill::~SimulatedMill() = default;
@@ -164,6 +198,14 @@ void SimulatedMill::load(const FixedProgram& program) {
   s.lp_z.reset();
   s.rng.seed(s.options.seed());
   s.time_s = 0;
+  // A run starts with the cutter as built.
+  for (int i = 0; i < static_cast<int>(s.runout_mm.size()); ++i) {
+    s.sim.set_tooth_runout_mm(i, s.runout_mm[static_cast<std::size_t>(i)]);
+  }
+  s.sim.set_force_scale(1.0);
+  s.next_break = 0;
+  s.cut_length_mm = 0;
+  s.worn_at_mm = 0;
   s.phase = program.count > 0 ? Phase::kCutting : Phase::kDone;
 }
 
@@ -192,6 +234,16 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
     const double edge = std::min(s.length(), s.sim.tool_position_mm() + s.radius());
     in.depth_mm = std::max(0.0, target - s.removed_at(std::max(0.0, edge)));
   }
+  // The tool's condition at this sample: breaks due, wear by the length cut.
+  while (s.next_break < s.breaks.size() && s.breaks[s.next_break].at_s <= s.time_s) {
+    const auto& b = s.breaks[s.next_break++];
+    s.sim.set_tooth_runout_mm(b.tooth, s.sim.tooth_runout_mm(b.tooth) - b.loss_mm);
+  }
+  // (Once a millimetre of cut: each new scale recomputes the cut's pressures.)
+  if (s.wear_per_mm > 0 && s.cut_length_mm - s.worn_at_mm >= 1.0) {
+    s.worn_at_mm = s.cut_length_mm;
+    s.sim.set_force_scale(1.0 + s.wear_per_mm * s.cut_length_mm);
+  }
   machining::Sample smp;
   uint32_t status = 0;
   double fx = 0, fy = 0, fz = 0;
@@ -202,6 +254,7 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
     fz = s.lp_z(s.trace_z[k]);
   }
   s.time_s += period_s_;
+  if (smp.teeth_in_cut > 0) s.cut_length_mm += in.feedrate_mm_s * period_s_;
   const double sigma = s.options.noise_rms_n();
   if (sigma > 0) {
     fx += sigma * s.noise(s.rng);

@@ -77,6 +77,17 @@ class CutEngine {
   }
 
   bool runout() const noexcept { return has_runout_; }
+  // Real-time: tooth i's radial runout from now on (a break moves its edge
+  // back: runout_chip_mm then gives its chip, and its follower's, as for
+  // runout).
+  void set_runout_mm(int tooth, double mm) noexcept {
+    if (tooth < 0 || tooth >= teeth_ || !std::isfinite(mm)) return;
+    runout_mm_[static_cast<std::size_t>(tooth)] = mm;
+    has_runout_ = true;
+  }
+  double runout_mm(int tooth) const noexcept {
+    return tooth >= 0 && tooth < teeth_ ? runout_mm_[static_cast<std::size_t>(tooth)] : 0.0;
+  }
 
   StructureModel& structure() noexcept { return structure_; }
   const StructureModel& structure() const noexcept { return structure_; }
@@ -109,10 +120,16 @@ class CutEngine {
       power_law_ = false;
       ct = l.k_t_n_per_mm2 * depth_mm;
       cn = l.k_n_n_per_mm2 * depth_mm;
-      ca_ = l.k_a_n_per_mm2 * depth_mm;
+      ca_ = force_scale_ * l.k_a_n_per_mm2 * depth_mm;
     }
-    st_coef_ = sense_d_ * ct;
-    fr_coef_ = cos_lead_ * cn;
+    st_coef_ = force_scale_ * sense_d_ * ct;
+    fr_coef_ = force_scale_ * cos_lead_ * cn;
+  }
+
+  // Real-time: every cutting pressure times `scale` from the next
+  // set_operating_point on (a worn tool: scale > 1).
+  void set_force_scale(double scale) noexcept {
+    if (std::isfinite(scale) && scale > 0) force_scale_ = scale;
   }
 
   // Forces of the teeth for displacement change (dux, duy) since one delay
@@ -285,6 +302,7 @@ class CutEngine {
   std::vector<double> offset_cos_, offset_sin_;  // tooth i's angle from tooth 0's
   std::vector<double> runout_mm_;                // tooth i's radial runout (mm)
   bool has_runout_ = false;
+  double force_scale_ = 1.0;
   int sense_;
   double sense_d_;
   CuttingLaw law_;

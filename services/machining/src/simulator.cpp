@@ -235,6 +235,17 @@ void MillSimulator::set_tool_position(double x_mm) noexcept {
 
 double MillSimulator::tool_position_mm() const noexcept { return impl_->position_mm; }
 
+void MillSimulator::set_tooth_runout_mm(int tooth, double runout_mm) noexcept {
+  impl_->engine.set_runout_mm(tooth, runout_mm);
+}
+double MillSimulator::tooth_runout_mm(int tooth) const noexcept {
+  return impl_->engine.runout_mm(tooth);
+}
+void MillSimulator::set_force_scale(double scale) noexcept {
+  impl_->engine.set_force_scale(scale);
+  impl_->in_feedrate = kNaN;  // the next step recomputes the operating point with it
+}
+
 void MillSimulator::reset() noexcept {
   Impl& s = *impl_;
   s.engine.reset();

@@ -495,3 +495,35 @@ TEST(SimulatedFeedDrive, FollowsTheCommandThroughAFirstOrderLag) {
     EXPECT_NE(std::string(e.what()).find("simulation.feed_drive_lag_s"), std::string::npos);
   }
 }
+
+// The simulated mill's tool condition (simulation.tooth_breaks, wear_per_m):
+// SMC I on the paper's part with tooth 2 losing its edge at 10 s. From the
+// break on, the next tooth cuts a double chip: the per-revolution F_Y peak
+// jumps and the force controller slows the feed, so the cut takes longer.
+// A bad tooth number is refused naming the field.
+TEST(ToolCondition, ABrokenToothRaisesThePeakForceAndSlowsTheCut) {
+  auto plain = run_paper("smc1.textproto");
+  auto broken = run_paper("smc1.textproto", {}, [](smc::config::SupervisorConfig& c) {
+    auto* b = c.mutable_simulation()->add_tooth_breaks();
+    b->set_tooth(2);
+    b->set_at_s(10);
+  });
+  ASSERT_TRUE(plain->summary.completed());
+  ASSERT_TRUE(broken->summary.completed());
+  double before = 0, after = 0;
+  for (const auto& rev : broken->run.revolutions) {
+    if (!rev.contact) continue;
+    (rev.t_s < 10 ? before : after) = std::max(rev.t_s < 10 ? before : after, rev.f_y_peak_n);
+  }
+  EXPECT_GT(after, 1.3 * before) << before << " -> " << after;
+  EXPECT_GT(broken->summary.cycle_time_s(), 1.2 * plain->summary.cycle_time_s());
+  auto cfg = test::shipped_config("smc1.textproto");
+  cfg.mutable_simulation()->add_tooth_breaks()->set_tooth(5);
+  try {
+    SimulatedMill m(cfg.milling_model(), cfg.simulation(), 0.5e-3);
+    ADD_FAILURE() << "tooth 5 of a 4-tooth cutter accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("simulation.tooth_breaks[0].tooth"), std::string::npos)
+        << e.what();
+  }
+}

@@ -180,3 +180,42 @@ TEST(Runout, SteadyCutVerdictsLeaveItOutAndSaySo) {
   EXPECT_EQ(r.stability.verdict, mc::Verdict::stable) << r.stability.reason;
   EXPECT_NE(r.stability.reason.find("revolution"), std::string::npos) << r.stability.reason;
 }
+
+// Tool condition (MillSimulator::set_tooth_runout_mm, set_force_scale): a
+// tooth that loses its edge cuts nothing and the next tooth takes its chip
+// too; the material removed per revolution, and so the mean force, stays
+// about the same while the peak rises; wear scales every pressure. Rigid
+// cut, steady feed, the whole cutter over the part.
+TEST(ToolCondition, ALostEdgeMovesItsChipToTheNextToothAndWearScalesTheForce) {
+  const mc::MillingModel m = mc::test::rigid_paper_case();
+  mc::SimulatorOptions o;
+  o.initial_tool_position_mm = 30;
+  mc::MillSimulator sim(m, o);
+  mc::Sample s;
+  // One revolution (80 samples at 1500 rpm) after `settle` samples: peak
+  // and mean |F_y|, and the teeth cutting at a quarter turn apart.
+  auto revolution = [&](int settle, double& peak, double& mean) {
+    for (int k = 0; k < settle; ++k) sim.step({10, 1500, 1.0}, s);
+    peak = mean = 0;
+    for (int k = 0; k < 80; ++k) {
+      sim.step({10, 1500, 1.0}, s);
+      peak = std::max(peak, std::fabs(s.fy_n));
+      mean += std::fabs(s.fy_n) / 80;
+    }
+  };
+  double peak0 = 0, mean0 = 0;
+  revolution(160, peak0, mean0);
+  sim.set_tooth_runout_mm(1, sim.tooth_runout_mm(1) - 1.0);  // tooth 2 loses its edge
+  double peak1 = 0, mean1 = 0;
+  revolution(160, peak1, mean1);
+  // The follower's chip doubles: F ~ h^(1 + feed exponent) = 2^0.63 = 1.55.
+  EXPECT_GT(peak1, 1.3 * peak0) << peak0 << " -> " << peak1;
+  EXPECT_NEAR(mean1 / mean0, 1.0, 0.25) << "the same material per revolution";
+  sim.set_force_scale(1.2);
+  double peak2 = 0, mean2 = 0;
+  revolution(160, peak2, mean2);
+  EXPECT_NEAR(peak2 / peak1, 1.2, 0.01);
+  EXPECT_NEAR(mean2 / mean1, 1.2, 0.01);
+  sim.reset();
+  EXPECT_DOUBLE_EQ(sim.tooth_runout_mm(1), -1.0) << "a new part does not mend the tool";
+}

@@ -124,6 +124,14 @@ class MillSimulator {
   // before the part). A non-finite x is ignored.
   void set_tool_position(double x_mm) noexcept;
   double tool_position_mm() const noexcept;
+  // Real-time safe. Tool condition from now on: tooth `tooth` (0-based)'s
+  // radial runout (a break moves its edge back: runout minus the edge lost,
+  // and the next tooth takes the chip it no longer cuts), and every cutting
+  // pressure times `scale` (wear). reset() keeps them: a new part does not
+  // mend the tool.
+  void set_tooth_runout_mm(int tooth, double runout_mm) noexcept;
+  double tooth_runout_mm(int tooth) const noexcept;
+  void set_force_scale(double scale) noexcept;
   // Real-time safe. Structure at rest, history cleared, time and spindle
   // angle to 0, tool at the initial position.
   void reset() noexcept;
