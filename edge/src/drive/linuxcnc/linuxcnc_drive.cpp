@@ -81,7 +81,6 @@ struct LinuxCncDrive::Impl {
   int rewrite_from = 0;
   // Control thread → loop.
   std::atomic<int> rewrite_done{0};
-  std::atomic<bool> started{false};
   std::atomic<bool> done{false};
   std::atomic<int> fault{static_cast<int>(CncFault::kNone)};
   mutable std::mutex why_mu;
@@ -225,7 +224,6 @@ void LinuxCncDrive::Impl::control_loop() {
   if (stop) return;
   try {
     cnc->run();
-    started = true;
     spdlog::info("{}: LinuxCNC runs {}", opt.machine_id, last_path);
   } catch (const std::exception& e) {
     set_fault(CncFault::kProgram, e.what());
@@ -386,6 +384,12 @@ Status LinuxCncDrive::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
 Status LinuxCncDrive::rewrite(const FixedProgram& program, int from) noexcept {
   Impl& d = *impl_;
   if (from < 0 || from >= program.count || !d.stream) return Status::kError;
+  // One hand-over at a time: the control thread reads the program being
+  // handed over (a rewrite before the last one was cut is an error).
+  if (d.rewrite_asked.load(std::memory_order_relaxed) !=
+      d.rewrite_done.load(std::memory_order_acquire)) {
+    return Status::kError;
+  }
   d.stream->set_feed_inhibit(true);
   d.stream->set_adaptive_feed(0);
   d.program = program;
