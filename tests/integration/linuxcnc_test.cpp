@@ -51,6 +51,14 @@ std::string capture(const std::string& cmd, int* status) {
   return out;
 }
 
+// Joins a thread on every way out of a test (an ASSERT returns early).
+struct JoinOnExit {
+  std::thread& t;
+  ~JoinOnExit() {
+    if (t.joinable()) t.join();
+  }
+};
+
 std::vector<double> numbers_after(const std::string& json, const std::string& key) {
   std::vector<double> out;
   const std::regex re("\"" + key + R"(\":\s*(-?[0-9.]+))");
@@ -214,12 +222,7 @@ TEST_F(LinuxCnc, TheEdgesFeedPinsMoveAndHoldTheAxis) {
       capture(src("deploy/linuxcnc/run.sh") + " exec " + smc::test::bin_path("smc-edge") +
                   " hal-feed-latency --steps 10 --timeout 15",
               &st);
-  struct Join {  // on every way out of the test
-    std::thread& t;
-    ~Join() {
-      if (t.joinable()) t.join();
-    }
-  } join{cnc};
+  JoinOnExit join{cnc};
   std::printf("%s", json.c_str());
   ASSERT_EQ(st, 0) << json;
   EXPECT_EQ(numbers_after(json, "settled"), std::vector<double>{10}) << json;
@@ -652,12 +655,7 @@ TEST_F(LinuxCncDyno, EStopMidCutEndsTheRunNamingItAndAJobInEStopIsRefused) {
   int st = -1;
   std::string out;
   std::thread run([&] { out = simulate(src("edge/configs/smc2.textproto"), "estop", &st); });
-  struct Join {
-    std::thread& t;
-    ~Join() {
-      if (t.joinable()) t.join();
-    }
-  } join{run};
+  JoinOnExit join{run};
   ASSERT_TRUE(wait_cutting());
   python("c.state(linuxcnc.STATE_ESTOP)");
   run.join();
@@ -678,12 +676,7 @@ TEST_F(LinuxCncDyno, StaleServoRecordsHoldTheFeedAndEndTheRun) {
   int st = -1;
   std::string out;
   std::thread run([&] { out = simulate(src("edge/configs/smc2.textproto"), "stale", &st); });
-  struct Join {
-    std::thread& t;
-    ~Join() {
-      if (t.joinable()) t.join();
-    }
-  } join{run};
+  JoinOnExit join{run};
   ASSERT_TRUE(wait_cutting());
   int hs = -1;
   const std::string h = as_mill("halcmd delf sampler.0 servo-thread", &hs);
@@ -701,12 +694,7 @@ TEST_F(LinuxCncDyno, ANaNForceHoldsTheFeedOnLinuxCnc) {
   int st = -1;
   std::string out;
   std::thread run([&] { out = simulate(src("edge/configs/smc2.textproto"), "nan", &st, 10); });
-  struct Join {
-    std::thread& t;
-    ~Join() {
-      if (t.joinable()) t.join();
-    }
-  } join{run};
+  JoinOnExit join{run};
   ASSERT_TRUE(wait_cutting());
   int hs = -1;
   std::string h = as_mill("halcmd unlinkp smc-dyno.force-z", &hs);

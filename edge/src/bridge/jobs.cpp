@@ -184,6 +184,7 @@ void EdgeService::Impl::finish_job() {
   stop_loop();
   drain();                                     // whatever the loop produced last
   job->done = job->done || job->core->done();  // the loop has stopped: safe to look
+  job->peak_force_n = std::max(job->peak_force_n, job->core->peak_force_n());
   if (pending_chatter) {
     chatter_writer.write(*pending_chatter);
     pending_chatter.reset();

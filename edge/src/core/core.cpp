@@ -128,6 +128,7 @@ void EdgeCore::start() {
   revolution_samples_ = 0;
   chatter_events_ = 0;
   power_peak_w_ = 0;
+  peak_force_n_ = 0;
   power_sum_w_ = 0;
   power_samples_ = 0;
   engagement_min_ = 1;
@@ -371,6 +372,7 @@ void EdgeCore::tick(bool overrun) noexcept {
     r.period_s = s_.revolution_period_s;
     r.revolution = s_.revolutions;
     r.f_y_peak_n = s_.f_y_peak_n;
+    if (s_.contact) peak_force_n_ = std::max(peak_force_n_, s_.f_y_peak_n);
     r.f_ref_n = s_.force_reference_n;
     r.feedrate_mm_s = s_.feedrate_cmd_mm_s;
     r.feed_per_tooth_mm = s_.feed_per_tooth_cmd_mm;

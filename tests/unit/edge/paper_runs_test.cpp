@@ -96,6 +96,9 @@ TEST(PaperRuns, NoControlChattersAndViolatesThePowerLimit) {
 
 TEST(PaperRuns, SmcOnePlannedPassesTrackTheReferenceWithoutChatter) {
   auto r = run_paper("smc1.textproto");
+  // The loop's own peak (what the edge reports for a job, whatever its
+  // telemetry ring dropped) is the run's.
+  EXPECT_DOUBLE_EQ(r->core->peak_force_n(), r->summary.peak_force_n());
   const auto& s = r->summary;
   EXPECT_TRUE(s.completed());
   EXPECT_EQ(s.passes_completed(), 2u);

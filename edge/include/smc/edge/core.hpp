@@ -141,6 +141,9 @@ class EdgeCore {
   bool done() const noexcept { return drive_sample_.program_done; }
   uint64_t ticks() const noexcept { return ticks_; }
   uint32_t chatter_events() const noexcept { return chatter_events_; }
+  // The largest per-revolution F_Y peak in contact since start(), kept by the
+  // loop itself: the job's figure, whatever the telemetry ring had to drop.
+  double peak_force_n() const noexcept { return peak_force_n_; }
   uint64_t dropped_events() const noexcept { return events_.dropped(); }
 
   rt::SpscRing<EdgeEvent, 1024>& events() noexcept { return events_; }
@@ -192,6 +195,7 @@ class EdgeCore {
   bool advance_revolution_clock() noexcept;
   uint32_t chatter_events_ = 0;
   double power_peak_w_ = 0;
+  double peak_force_n_ = 0;
   double power_sum_w_ = 0;
   int power_samples_ = 0;
   double engagement_min_ = 1;
