@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
     {
       smc::test::ForbidAllocations guard;
       for (; ticks < ticks_max && !core.done(); ++ticks) {
-        (void)drive.wait_sample(std::chrono::milliseconds(20));
+        (void)drive.wait_sample();
         core.tick(false);
       }
       allocations = guard.violations();

@@ -95,7 +95,7 @@ void EdgeService::Impl::start_job(const smc::config::JobAssignment& a) {
     rj->pacer = std::thread([rj] {
       rt::TickInfo info{};
       while (!rj->stop_pacer && !rj->core->done()) {
-        (void)rj->cnc->wait_sample(std::chrono::milliseconds(20));
+        (void)rj->cnc->wait_sample();
         rj->rt->tick(info);
         ++info.index;
       }

@@ -248,7 +248,7 @@ void add_simulate(CLI::App& app) {
                            1);
       opts.before_tick = [cnc, &intervals_ms, &max_backlog,
                           last = std::chrono::steady_clock::time_point{}]() mutable {
-        (void)cnc->wait_sample(std::chrono::milliseconds(20));
+        (void)cnc->wait_sample();
         const auto now = std::chrono::steady_clock::now();
         if (last.time_since_epoch().count() != 0 && intervals_ms.size() < intervals_ms.capacity()) {
           intervals_ms.push_back(std::chrono::duration<double, std::milli>(now - last).count());

@@ -43,7 +43,11 @@ struct LinuxCncDriveOptions {
   std::string nml_file = "/usr/share/linuxcnc/linuxcnc.nml";
   // Where the programs are written (must be readable by LinuxCNC's user).
   std::string program_dir = "/tmp/smc-programs";
-  double stale_after_s = 0.05;  // no servo record for this long: a fault
+  // No servo record for this long: a fault. 250 ms, like smc-edge.hal's
+  // watchdog, for LinuxCNC's POSIX threads on a shared non-realtime machine
+  // (its servo thread was seen to stall past 50 ms under load); about 50 ms
+  // on a realtime kernel.
+  double stale_after_s = 0.25;
 };
 
 class LinuxCncDrive final : public Drive {
@@ -59,8 +63,10 @@ class LinuxCncDrive final : public Drive {
   Status rewrite(const FixedProgram& program, int from) noexcept override;
   double sample_period_s() const noexcept override { return period_s_; }
 
-  // The loop's pacing: true once a servo record waits (false after timeout).
-  bool wait_sample(std::chrono::nanoseconds timeout) noexcept;
+  // The loop's pacing: true once a servo record waits, false after the
+  // stale time (the tick that follows then holds the feed: a stale fault).
+  // A tick never runs on a record it has already had.
+  bool wait_sample() noexcept;
   // Not real-time: the fault's cause, empty while there is none.
   std::string fault() const;
   // Servo records lost or repeated (the sampler's numbering), and read.

@@ -292,10 +292,11 @@ void LinuxCncDrive::Impl::control_loop() {
   }
 }
 
-bool LinuxCncDrive::wait_sample(std::chrono::nanoseconds timeout) noexcept {
+bool LinuxCncDrive::wait_sample() noexcept {
   Impl& d = *impl_;
   if (!d.stream) return false;
-  const std::int64_t until = now_ns() + timeout.count();
+  const std::int64_t until =
+      d.last_record_ns + static_cast<std::int64_t>(d.opt.stale_after_s * 1e9) + 1'000'000;
   while (d.stream->backlog() <= 0) {
     if (now_ns() >= until) return false;
     timespec pause{0, 50'000};
