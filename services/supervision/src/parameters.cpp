@@ -106,7 +106,10 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   p.min_feed_per_tooth_mm =
       o.in_range("min_feed_per_tooth_mm", op.min_feed_per_tooth_mm(), 1e-6, p.max_feed_per_tooth_mm,
                  "set the lowest controlled feed, e.g. 0.005");
-  p.teeth = static_cast<int>(o.in_range("teeth", op.teeth(), 1, 64, "set the cutter's teeth"));
+  // Counts: checked, then clamped before the conversion (an int cannot hold
+  // every uint32 a document may carry).
+  p.teeth = static_cast<int>(
+      std::clamp(o.in_range("teeth", op.teeth(), 1, 64, "set the cutter's teeth"), 0.0, 64.0));
   p.cutter_radius_mm =
       o.positive("cutter_radius_mm", op.cutter_radius_mm(), "set the cutter radius, e.g. 25");
   p.sample_period_s = o.in_range("sample_period_s", op.sample_period_s(), 1e-5, 0.01,
@@ -136,8 +139,9 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   p.chatter_threshold = o.in_range("chatter_threshold", op.chatter_threshold(), 1e-3, 1.0,
                                    "set module E's energy-ratio threshold, e.g. 0.3");
   p.chatter_confirm_revolutions = static_cast<int>(
-      o.in_range("chatter_confirm_revolutions", op.chatter_confirm_revolutions(), 1, 50,
-                 "set how many revolutions must exceed the threshold, e.g. 2"));
+      std::clamp(o.in_range("chatter_confirm_revolutions", op.chatter_confirm_revolutions(), 1, 50,
+                            "set how many revolutions must exceed the threshold, e.g. 2"),
+                 0.0, 50.0));
   p.chatter_band_low_hz = o.non_negative("chatter_band_low_hz", op.chatter_band_low_hz(),
                                          "set the chatter search band, e.g. 150");
   p.chatter_band_high_hz =
@@ -175,6 +179,17 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   p.model_alpha = fm.alpha();
 
   if (!sample_ok) return p;  // the derived counts need a sample period
+  // A count of sample periods, refused past kMaxCount (a day at 2 kHz: no
+  // period of the edge is near it, and an int must hold it).
+  constexpr double kMaxCount = 2e8;
+  auto count = [&](const Checker& mod, double n, const char* field, double v) {
+    if (!(n >= 0 && n <= kMaxCount)) {
+      mod.fail(field, "is longer than the edge handles (more than 2e8 sample periods)", v,
+               "give a period of seconds, not more");
+      return 0;
+    }
+    return static_cast<int>(n);
+  };
   auto samples = [&](double period, const char* field) {
     if (!(period > 0) || !std::isfinite(period)) return 0;  // reported above
     const double n = period / p.sample_period_s;
@@ -184,17 +199,20 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
              "make it a multiple of sample_period_s");
       return 0;
     }
-    return static_cast<int>(r);
+    return count(o, r, field, period);
   };
   p.samples_per_fast = samples(p.fast_period_s, "fast_period_s");
   p.samples_per_revolution = samples(p.slow_period_s, "slow_period_s");
-  p.samples_per_hold = static_cast<int>(std::round(p.suppression_hold_s / p.sample_period_s));
+  p.samples_per_hold = count(o, std::round(p.suppression_hold_s / p.sample_period_s),
+                             "suppression_hold_s", p.suppression_hold_s);
   if (p.min_spindle_rpm > 0 && p.max_spindle_rpm >= p.min_spindle_rpm) {
     p.max_samples_per_revolution =
         std::max(p.samples_per_revolution,
-                 static_cast<int>(std::ceil(60.0 / p.min_spindle_rpm / p.sample_period_s - 1e-9)));
-    p.min_samples_per_revolution = std::max(
-        1, static_cast<int>(std::floor(60.0 / p.max_spindle_rpm / p.sample_period_s + 1e-9)));
+                 count(m, std::ceil(60.0 / p.min_spindle_rpm / p.sample_period_s - 1e-9),
+                       "min_spindle_rpm", p.min_spindle_rpm));
+    p.min_samples_per_revolution =
+        std::max(1, count(m, std::floor(60.0 / p.max_spindle_rpm / p.sample_period_s + 1e-9),
+                          "max_spindle_rpm", p.max_spindle_rpm));
     if (p.max_samples_per_revolution > kMaxSamplesPerRevolution) {
       m.fail("min_spindle_rpm",
              "gives revolutions of " + std::to_string(p.max_samples_per_revolution) +

@@ -157,3 +157,19 @@ TEST(GrafcetBudget, AnOversizedTextIsRefusedBeforeParsing) {
         << e.what();
   }
 }
+
+// Periods and counts a document may carry that no int holds (found by
+// fuzz_documents: a 1e30 s period was converted to a count unchecked, which
+// is undefined behaviour): refused naming the field, every one.
+TEST(Validate, HugePeriodsAndCountsAreRefusedNotConverted) {
+  auto cfg = shipped("smc2.textproto");
+  cfg.mutable_operation()->set_slow_period_s(1e30);
+  cfg.mutable_operation()->set_suppression_hold_s(1e30);
+  cfg.mutable_operation()->set_teeth(4'000'000'000u);
+  cfg.mutable_operation()->set_chatter_confirm_revolutions(4'000'000'000u);
+  const std::string why = refusal(cfg);
+  for (const char* field : {"operation.slow_period_s", "operation.suppression_hold_s",
+                            "operation.teeth", "operation.chatter_confirm_revolutions"}) {
+    EXPECT_NE(why.find(field), std::string::npos) << field << " in: " << why;
+  }
+}
