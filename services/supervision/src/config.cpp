@@ -27,7 +27,7 @@ ValidatedConfig validate(const smc::config::SupervisorConfig& cfg, ModuleMask kn
   }
   c.variant = cfg.variant();
   if (cfg.variant() == smc::config::SMC_UNSPECIFIED) {
-    problems.add(root + "variant", "is unspecified", "use SMC_NONE, SMC_I or SMC_II");
+    problems.add(root + "variant", "is unspecified", "use SMC_NONE, SMC_I, SMC_II or SMC_II_PLUS");
   }
   c.params = read_parameters(cfg, problems);
   const bool params_ok = problems.ok();

@@ -54,8 +54,8 @@ BoundGrafcet bind_grafcet(std::string_view text, std::string_view source_name, M
     if (name.size() != 1 || name[0] < 'a' || name[0] >= 'a' + kReceptivityCount) {
       problems.add(where,
                    "input " + common::quote(name, 16) +
-                       " is not a receptivity of the state supervisor (a, b, c, d or e)",
-                   "use only the receptivities a to e");
+                       " is not a receptivity of the state supervisor (a to h)",
+                   "use only the receptivities a to h (services/grafcet/README.md)");
       continue;
     }
     b.input_index[static_cast<size_t>(name[0] - 'a')] = static_cast<int>(i);

@@ -28,7 +28,9 @@ const char* module_name(ModuleId m) noexcept {
                                                        "contact monitor",
                                                        "adaptive force controller",
                                                        "model-based force controller",
-                                                       "spindle power monitor"};
+                                                       "spindle power monitor",
+                                                       "tool-breakage detector",
+                                                       "spindle-speed chatter suppressor"};
   const auto i = static_cast<int>(m);
   return i < kModuleCount ? kNames[i] : "";
 }

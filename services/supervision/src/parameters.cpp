@@ -163,6 +163,25 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
           ? 0.95
           : o.in_range("power_target_fraction", op.power_target_fraction(), 0.5, 1.0,
                        "set the share of P_max module M holds, e.g. 0.95 (0: the default)");
+  // Modules beyond the paper; 0 takes the default.
+  auto or_default = [&](const char* field, double v, double dflt, double lo, double hi,
+                        const char* fix) {
+    return v == 0 ? dflt : o.in_range(field, v, lo, hi, fix);
+  };
+  p.breakage_threshold = or_default("breakage_threshold", op.breakage_threshold(), 0.3, 0.05, 2.0,
+                                    "set module N's drop-and-rise share, e.g. 0.3 (0: default)");
+  p.speed_change_frequency_margin =
+      or_default("speed_change_frequency_margin", op.speed_change_frequency_margin(), 0.04, 1e-6,
+                 0.3, "set module O's margin below the chatter frequency, e.g. 0.04 (0: default)");
+  p.speed_change_max_ratio =
+      or_default("speed_change_max_ratio", op.speed_change_max_ratio(), 2.0, 1.0, 10.0,
+                 "set how far module O may move the speed, e.g. 2 (0: default)");
+  p.spindle_at_speed_tolerance =
+      or_default("spindle_at_speed_tolerance", op.spindle_at_speed_tolerance(), 0.01, 1e-4, 0.2,
+                 "set the at-speed band, e.g. 0.01 (0: default)");
+  p.speed_change_timeout_s =
+      or_default("speed_change_timeout_s", op.speed_change_timeout_s(), 5.0, 0.01, 60.0,
+                 "set the time the spindle has to reach a new speed, e.g. 5 (0: default)");
   p.force_sensor_range_n = o.positive("force_sensor_range_n", op.force_sensor_range_n(),
                                       "set the dynamometer's range, e.g. 5000");
 

@@ -45,8 +45,8 @@ TEST(GrafcetEngineAllocation, CounterSeesAllocations) {
 }
 
 TEST(GrafcetEngineAllocation, EvaluateAndResetNeverAllocate) {
-  for (const char* file :
-       {"smc1.grafcet", "smc1_guarded.grafcet", "smc2.grafcet", "broken/smc2_printed.grafcet"}) {
+  for (const char* file : {"smc1.grafcet", "smc1_guarded.grafcet", "smc2.grafcet",
+                           "smc2_plus.grafcet", "broken/smc2_printed.grafcet"}) {
     const Grafcet g = testing::load_ok(file);
     Engine engine(g);
     const long before = g_allocations.load();

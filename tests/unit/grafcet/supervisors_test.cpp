@@ -55,6 +55,23 @@ std::string smc1_guarded_modules(std::uint32_t step) {
   return m;
 }
 
+// SMC II+ rules (cell/grafcets/smc2_plus.grafcet): A always; B unless a
+// suppression runs (steps 6, 7); I and J in steps 2 and 4; D, E, H, K and
+// the breakage detector N while in contact (step 4); C, the feed hold, for
+// the operator (5) and a broken tool (9); G for the added pass (6); O for
+// the spindle speed change (7).
+std::string smc2_plus_modules(std::uint32_t step) {
+  std::string m = "A";
+  if (step != 6 && step != 7) m += "B";
+  if (step == 2 || step == 4) m += "IJ";
+  if (step == 4) m += "DEHKN";
+  if (step == 5 || step == 9) m += "C";
+  if (step == 6) m += "G";
+  if (step == 7) m += "O";
+  std::sort(m.begin(), m.end());
+  return m;
+}
+
 class Supervisor {
  public:
   Supervisor(const char* file, std::string (*rules)(std::uint32_t))
@@ -219,18 +236,58 @@ TEST(Smc2Supervisor, Priorities) {
   s.step("a b e", 5);
 }
 
+TEST(Smc2PlusSupervisor, SpeedChangeFirstThenAddedPassAndBreakageWins) {
+  Supervisor s("smc2_plus.grafcet", smc2_plus_modules);
+  s.step("", 2, "EKN");
+  s.step("b", 4, "EK");
+  // First automatic chatter of the pass: the spindle speed change (7).
+  s.step("b d", 7);
+  s.step("b d", 7);
+  // At speed: E and K reset at the new speed (8), back in the cut.
+  s.step("b d g", 4, "EK");
+  // The core now says this pass had its speed change (h): the next chatter
+  // adds a pass (6), as SMC II.
+  s.step("b h", 4);
+  s.step("b d h", 6);
+  // Complete with contact still set: through 2 and 3 to 4, E and K reset.
+  s.step("b d e h", 4, "EK");
+  s.step("b", 4);
+  // The operator's chatter signal always adds a pass.
+  s.step("b c", 6);
+  s.step("b c e", 4, "EK");
+  s.step("b", 4);
+  // A breakage from the cut: feed held (9) and stays so while f is latched,
+  // whatever else comes.
+  s.step("b f", 9);
+  s.step("b d f", 9);
+  s.step("a b c f", 9);
+  s.step("f", 9);
+  // The operator's hold wins over a breakage seen in the same evaluation;
+  // released, the breakage takes over.
+  s.step("", 2);
+  s.step("a f", 5);
+  s.step("f", 9);
+  // A breakage during a speed change.
+  s.step("", 2);
+  s.step("b", 4, "EK");
+  s.step("b d", 7);
+  s.step("b f", 9);
+}
+
 // Random input sequences: the rules hold at every evaluation.
 TEST(Smc2Supervisor, RulesHoldOnRandomInputSequences) {
-  for (const char* file : {"smc1.grafcet", "smc1_guarded.grafcet", "smc2.grafcet"}) {
+  for (const char* file :
+       {"smc1.grafcet", "smc1_guarded.grafcet", "smc2.grafcet", "smc2_plus.grafcet"}) {
     const Grafcet g = testing::load_ok(file);
     Engine e(g);
     auto rules = std::string(file) == "smc1.grafcet"           ? smc1_modules
                  : std::string(file) == "smc1_guarded.grafcet" ? smc1_guarded_modules
+                 : std::string(file) == "smc2_plus.grafcet"    ? smc2_plus_modules
                                                                : smc2_modules;
     std::mt19937_64 rng(12345);
     Mask in = 0;
     for (int i = 0; i < 20000; ++i) {
-      in ^= (rng() & rng()) & 0x1Fu;  // a few bits change each time
+      in ^= (rng() & rng()) & ((Mask{1} << g.inputs().size()) - 1);  // a few bits change
       const Evaluation& r = e.evaluate(in);
       ASSERT_FALSE(r.unstable);
       ASSERT_EQ(std::popcount(r.active_steps), 1);

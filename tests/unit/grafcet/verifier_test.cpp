@@ -115,6 +115,57 @@ TEST(GrafcetVerifier, GuardedSmcOneWithLDuringTheRoutineIsRefused) {
   EXPECT_NE(format_report(g, r).find("FAIL: 2 violations"), std::string::npos);
 }
 
+// SMC II+ (beyond the paper): every step reachable, every invariant held --
+// among them no feed while a breakage is latched and at most one speed
+// change per pass. Steps 1, 3 and 8 are transient.
+TEST(GrafcetVerifier, SmcTwoPlusPasses) {
+  const Grafcet g = load_ok("smc2_plus.grafcet");
+  const Report r = verify(g);
+  EXPECT_TRUE(r.ok()) << format_report(g, r);
+  EXPECT_EQ(r.reachable_steps, (Mask{1} << g.steps().size()) - 1);
+  EXPECT_EQ(r.stable_situations, g.steps().size() - 3);
+  EXPECT_EQ(r.invariants.size(), g.invariants().size());
+  std::set<std::string> names;
+  for (const InvariantResult& inv : r.invariants) {
+    EXPECT_TRUE(inv.held) << inv.name;
+    EXPECT_EQ(inv.evaluations, r.evolutions) << inv.name;
+    names.insert(inv.name);
+  }
+  EXPECT_TRUE(names.count("no feed while a breakage is latched"));
+  EXPECT_TRUE(names.count("at most one speed change per pass"));
+}
+
+// A mutated SMC II+ that changes speed for every chatter is refused, with
+// the path: contact, then chatter in a pass that already had its change.
+TEST(GrafcetVerifier, SmcTwoPlusWithASecondSpeedChangeIsRefused) {
+  const std::string file = "broken/smc2_plus_second_speed_change.grafcet";
+  const auto shipped = statements(read_text("smc2_plus.grafcet"));
+  const auto broken = statements(read_text(file));
+  ASSERT_EQ(shipped.size(), broken.size());
+  std::vector<std::string> differ;
+  for (std::size_t i = 0; i < shipped.size(); ++i) {
+    if (shipped[i] != broken[i]) differ.push_back(broken[i]);
+  }
+  ASSERT_EQ(differ.size(), 3u);
+  EXPECT_EQ(differ[1], "transition 10: 4 -> 7 when ↑d");
+  EXPECT_EQ(differ[2], "order 4: 5, 13, 7, 10, 6");
+  const Grafcet g = load_ok(file);
+  const Report r = verify(g);
+  ASSERT_EQ(checks_of(r), std::set<Check>{Check::kInvariant}) << format_report(g, r);
+  std::set<std::string> violated;
+  for (const Violation& v : r.violations) violated.insert(v.subject);
+  EXPECT_TRUE(violated.count("invariant \"at most one speed change per pass\""))
+      << format_report(g, r);
+  for (const Violation& v : r.violations) {
+    if (v.subject != "invariant \"at most one speed change per pass\"") continue;
+    ASSERT_EQ(v.path.size(), 2u);
+    EXPECT_EQ(v.path[1].inputs, testing::inputs(g, "b d h"));
+    const Evaluation last = replay(g, v.path);
+    EXPECT_EQ(last.level_actions & (Mask{1} << g.action_index("O")),
+              Mask{1} << g.action_index("O"));
+  }
+}
+
 TEST(GrafcetVerifier, SeededConflict) {
   const Grafcet g = load_ok("broken/conflict.grafcet");
   const Report r = verify(g);

@@ -1,7 +1,8 @@
 #pragma once
 // The operation supervisor's Grafcet bound to the edge's vocabulary: its
 // level and impulse actions name modules (A, B, … ; "X*" resets X), its
-// inputs are the state supervisor's receptivities a–e (paper, Table 2).
+// inputs are the state supervisor's receptivities a–e (paper, Table 2)
+// and f–h (beyond the paper: tool breakage, spindle speed change).
 // Checked cheaply first (names, sizes), then verified exhaustively. Used by
 // the edge's operation supervisor and by configuration validation in cell
 // and edge alike. Not for the real-time loop (allocates).
@@ -26,8 +27,12 @@ enum Receptivity : uint8_t {
   kInputC = 2,  // c: chatter signalled by the operator
   kInputD = 3,  // d: chatter detected automatically
   kInputE = 4,  // e: chatter suppression routine complete
+  // Beyond the paper (SMC II+, cell/grafcets/smc2_plus.grafcet):
+  kInputF = 5,  // f: tool breakage detected (module N, latched until N is reset)
+  kInputG = 6,  // g: spindle speed change complete (module O: at the new speed)
+  kInputH = 7,  // h: the spindle speed was changed in this pass already (module O)
 };
-inline constexpr int kReceptivityCount = 5;
+inline constexpr int kReceptivityCount = 8;
 
 struct BoundGrafcet {
   grafcet::Grafcet grafcet;
@@ -50,7 +55,7 @@ struct CheckBudget {
 
 // Refuses a text over the budget's size, parses it (named `source_name` in
 // messages), checks that every action is a module in `allowed` and every
-// input a receptivity a–e, then verifies it within the budget. Throws
+// input a receptivity a–h, then verifies it within the budget. Throws
 // ConfigError: parse errors as "file:line:col: …", a bad action or input
 // naming it, a failed or over-budget verification with the verifier's report.
 BoundGrafcet bind_grafcet(std::string_view text, std::string_view source_name, ModuleMask allowed,

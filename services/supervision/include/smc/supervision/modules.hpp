@@ -19,9 +19,12 @@ namespace smc::supervision {
 
 // A–L: the paper's Table 1. M: spindle power monitor (holds the mean spindle
 // power per revolution at the limit by scaling F_ref; runs under the state
-// supervisor whenever configured, not as a Grafcet action).
-enum class ModuleId : uint8_t { A, B, C, D, E, F, G, H, I, J, K, L, M };
-inline constexpr int kModuleCount = 13;       // A–M
+// supervisor whenever configured, not as a Grafcet action). Beyond the
+// paper (edge/README.md, "Modules beyond Table 1"): N, tool-breakage
+// detector (per-tooth force, receptivity f); O, spindle-speed chatter
+// suppressor (moves the spindle to a stable pocket, receptivities g, h).
+enum class ModuleId : uint8_t { A, B, C, D, E, F, G, H, I, J, K, L, M, N, O };
+inline constexpr int kModuleCount = 15;       // A–O
 inline constexpr int kPaperModuleCount = 12;  // the paper's modules, A–L
 inline constexpr int kMaxModules = 16;        // what a ModuleMask can hold, A–P
 using ModuleMask = uint16_t;

@@ -67,8 +67,13 @@ struct Parameters {
   double chatter_min_rms_n = 0;
   double suppression_hold_s = 0;
   double force_sensor_range_n = 0;
-  double power_time_constant_s = 0.1;   // module M's filter on the power/force ratio
-  double power_target_fraction = 0.95;  // module M holds the mean power at this x P_max
+  double power_time_constant_s = 0.1;           // module M's filter on the power/force ratio
+  double power_target_fraction = 0.95;          // module M holds the mean power at this x P_max
+  double breakage_threshold = 0.3;              // module N: drop and rise, share of the window mean
+  double speed_change_frequency_margin = 0.04;  // module O: tooth frequency (1 - m) f_c / k
+  double speed_change_max_ratio = 2;            // module O: within [1/r, r] x programmed
+  double spindle_at_speed_tolerance = 0.01;     // module O: at speed within this share
+  double speed_change_timeout_s = 5;            // module O: at speed within this time
   // Force-process model (eq. 1) for module L: F_Y[kN] = K d^beta f^alpha.
   bool has_force_model = false;
   double model_k_kn = 0;
