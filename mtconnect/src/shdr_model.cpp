@@ -117,6 +117,7 @@ std::vector<std::string> ShdrModel::on_gone(const std::string& machine_id, std::
     set(m, item, "UNAVAILABLE", t_ns, out);
   }
   set(m, "chatter", "UNAVAILABLE||||", t_ns, out);
+  set(m, "tool", "UNAVAILABLE||||", t_ns, out);
   set(m, "edge_fault", "UNAVAILABLE||||", t_ns, out);
   m.pending.clear();
   return out;
@@ -171,11 +172,15 @@ std::vector<std::string> ShdrModel::on_chatter(const smc_data_ChatterEvent& e, s
   m.chatter_at_ns = e.machine_time_ns > 0 ? e.machine_time_ns : 1;
   const bool automatic = e.source == smc_data_CHATTER_AUTOMATIC;
   char text[200];
-  std::snprintf(text, sizeof text, "%s in pass %u%s; program now %u passes (job %s)",
+  const std::string remedy =
+      e.new_spindle_rpm > 0
+          ? "spindle speed now " + num(static_cast<double>(e.new_spindle_rpm), 0) + " rpm"
+          : "program now " + std::to_string(e.new_pass_count) + " passes";
+  std::snprintf(text, sizeof text, "%s in pass %u%s; %s (job %s)",
                 automatic ? "chatter detected" : "chatter signalled by the operator",
                 e.pass_index + 1u,
-                automatic ? (" at " + num(e.frequency_hz, 0) + " Hz").c_str() : "",
-                static_cast<unsigned>(e.new_pass_count), wire::get_string(e.job_id).c_str());
+                automatic ? (" at " + num(e.frequency_hz, 0) + " Hz").c_str() : "", remedy.c_str(),
+                wire::get_string(e.job_id).c_str());
   set(m, "chatter",
       std::string("WARNING|") + (automatic ? "CHATTER_AUTOMATIC" : "CHATTER_OPERATOR") + "||HIGH|" +
           clean(text),
@@ -188,6 +193,13 @@ std::vector<std::string> ShdrModel::on_progress(const smc_data_JobProgress& p, s
   Mill& m = mill(wire::get_string(p.machine_id));
   const std::string job = wire::get_string(p.job_id);
   set(m, "program", clean(job), t_ns, out);
+  // Module N's stop: the tool condition is a fault until the next job runs.
+  const std::string message = wire::get_string(p.message);
+  if (p.phase == smc_data_JOB_FAILED && message.rfind("tool breakage", 0) == 0) {
+    set(m, "tool", "FAULT|TOOL_BREAKAGE||HIGH|" + clean(message + " (job " + job + ")"), t_ns, out);
+  } else if (p.phase == smc_data_JOB_RUNNING) {
+    set(m, "tool", "NORMAL||||", t_ns, out);
+  }
   if (p.phase == smc_data_JOB_DONE || p.phase == smc_data_JOB_FAILED ||
       p.phase == smc_data_JOB_INTERRUPTED) {
     m.last_phase = static_cast<int>(p.phase);
@@ -211,7 +223,9 @@ std::vector<std::string> ShdrModel::on_config(const std::string& machine_id,
   Mill& m = mill(machine_id);
   const char* v = c.variant() == smc::config::SMC_I    ? "SMC I (transfer line)"
                   : c.variant() == smc::config::SMC_II ? "SMC II (job shop)"
-                                                       : "unspecified";
+                  : c.variant() == smc::config::SMC_II_PLUS
+                      ? "SMC II+ (job shop, tool breakage, speed change)"
+                      : "unspecified";
   set(m, "smc", clean(std::string(v) + ", supervisor " + c.grafcet_name()), t_ns, out);
   m.programmed_mm_s.clear();
   for (const auto& pass : c.program().passes()) m.programmed_mm_s.push_back(pass.feedrate_mm_s());
@@ -282,6 +296,7 @@ std::string devices_xml(const std::vector<std::string>& machine_ids) {
          item("EVENT", "feed_ovr", "PATH_FEEDRATE_OVERRIDE", " subType=\"PROGRAMMED\"") + "\n";
     x += "                " + item("SAMPLE", "Fy", "FORCE", " units=\"NEWTON\"") + "\n";
     x += "                " + item("CONDITION", "chatter", "SYSTEM", "") + "\n";
+    x += "                " + item("CONDITION", "tool", "SYSTEM", "") + "\n";
     x += "              </DataItems>\n";
     x += "            </Path>\n";
     x += "          </Components>\n";

@@ -193,6 +193,8 @@ struct EdgeService::Impl {
   // ---- telemetry.cpp
   void drain();
   void on_event(const EdgeEvent& e);
+  // The program after a rewrite or a speed change, on smc_program.
+  void publish_program(const EdgeEvent& e);
 
   // Last member: destroyed (its thread stopped) before everything it uses.
   std::unique_ptr<ConfigIntake> intake;

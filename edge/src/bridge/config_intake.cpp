@@ -74,6 +74,12 @@ void ConfigIntake::run() {
 // ------------------------------------------------------- the comms side --
 
 void EdgeService::Impl::use_mill_model(smc::config::SupervisorConfig& cfg) const {
+  for (const auto& b : opt.tooth_breaks) {
+    auto* t = cfg.mutable_simulation()->add_tooth_breaks();
+    t->set_tooth(b.tooth);
+    t->set_at_s(b.at_s);
+    t->set_edge_loss_mm(b.edge_loss_mm);
+  }
   if (opt.mill_model_file.empty()) return;
   smc::config::MillingModel own;
   smc::documents::load(opt.mill_model_file, own);

@@ -163,6 +163,8 @@ void EdgeService::Impl::publish_progress(smc_data_JobPhase phase, const std::str
 }
 
 bool EdgeService::Impl::job_running() const {
+  // The edge ended the job itself (a tool breakage).
+  if (!job->failure.empty()) return false;
   if (job->cnc != nullptr) {
     // A LinuxCNC fault ends the job: the drive holds the feed and LinuxCNC's
     // program is aborted; the cell hears why.

@@ -60,6 +60,39 @@ void EdgeService::Impl::drain() {
   }
 }
 
+void EdgeService::Impl::publish_program(const EdgeEvent& e) {
+  // The core pushes the program before the event, so it is there now.
+  FixedProgram latest;
+  while (job->core->programs().try_pop(latest)) job->program = latest;
+  smc::config::PartProgram prog = job->config.program();
+  prog.clear_passes();
+  const FixedProgram& fp = job->program;
+  for (int i = 0; i < fp.count; ++i) {
+    auto* p = prog.add_passes();
+    p->set_depth_mm(fp.passes[static_cast<size_t>(i)].depth_mm);
+    p->set_feedrate_mm_s(fp.passes[static_cast<size_t>(i)].feedrate_mm_s);
+    p->set_spindle_rpm(fp.passes[static_cast<size_t>(i)].spindle_rpm);
+  }
+  prog.set_revision(fp.revision);
+  // The program a CNC control would be given now: the remaining depth
+  // from the pass the rewrite restarts (services/supervision gcode.hpp).
+  prog.clear_gcode();
+  try {
+    smc::config::SupervisorConfig now = job->config;
+    *now.mutable_program() = prog;
+    const int from =
+        std::clamp(static_cast<int>(e.pass_index), 0, std::max(0, static_cast<int>(fp.count) - 1));
+    prog.set_gcode(smc::supervision::render_gcode(
+        now, {.title = "job " + job->assignment.job_id() + " on " + opt.machine_id + ", rewrite " +
+                       std::to_string(fp.revision) + ": passes " + std::to_string(from + 1) +
+                       " to " + std::to_string(fp.count),
+              .first_pass = from}));
+  } catch (const std::exception& ex) {
+    spdlog::warn("{}: the rewritten program has no G-code: {}", opt.machine_id, ex.what());
+  }
+  program_writer.publish(opt.machine_id, job->assignment.job_id(), prog);
+}
+
 void EdgeService::Impl::on_event(const EdgeEvent& e) {
   switch (e.kind) {
     case EventKind::kSituationChanged: {
@@ -97,46 +130,34 @@ void EdgeService::Impl::on_event(const EdgeEvent& e) {
       ++job->chatter_events;
       break;
     }
-    case EventKind::kProgramRewritten: {
-      // The core pushes the program before the event, so it is there now.
-      FixedProgram latest;
-      while (job->core->programs().try_pop(latest)) job->program = latest;
-      smc::config::PartProgram prog = job->config.program();
-      prog.clear_passes();
-      const FixedProgram& fp = job->program;
-      for (int i = 0; i < fp.count; ++i) {
-        auto* p = prog.add_passes();
-        p->set_depth_mm(fp.passes[static_cast<size_t>(i)].depth_mm);
-        p->set_feedrate_mm_s(fp.passes[static_cast<size_t>(i)].feedrate_mm_s);
-        p->set_spindle_rpm(fp.passes[static_cast<size_t>(i)].spindle_rpm);
-      }
-      prog.set_revision(fp.revision);
-      // The program a CNC control would be given now: the remaining depth
-      // from the pass the rewrite restarts (services/supervision gcode.hpp).
-      prog.clear_gcode();
-      try {
-        smc::config::SupervisorConfig now = job->config;
-        *now.mutable_program() = prog;
-        const int from = std::clamp(static_cast<int>(e.pass_index), 0,
-                                    std::max(0, static_cast<int>(fp.count) - 1));
-        prog.set_gcode(smc::supervision::render_gcode(
-            now, {.title = "job " + job->assignment.job_id() + " on " + opt.machine_id +
-                           ", rewrite " + std::to_string(fp.revision) + ": passes " +
-                           std::to_string(from + 1) + " to " + std::to_string(fp.count),
-                  .first_pass = from}));
-      } catch (const std::exception& ex) {
-        spdlog::warn("{}: the rewritten program has no G-code: {}", opt.machine_id, ex.what());
-      }
-      program_writer.publish(opt.machine_id, job->assignment.job_id(), prog);
+    case EventKind::kProgramRewritten:
+    case EventKind::kSpeedChanged: {
+      const bool speed = e.kind == EventKind::kSpeedChanged;
+      publish_program(e);
       if (pending_chatter) {
-        pending_chatter->new_pass_count = fp.count;
+        pending_chatter->new_pass_count = static_cast<uint16_t>(job->program.count);
+        if (speed) pending_chatter->new_spindle_rpm = static_cast<float>(e.value);
         chatter_writer.write(*pending_chatter);
         pending_chatter.reset();
       }
-      spdlog::warn("{}: chatter suppressor rewrote the program to {} passes", opt.machine_id,
-                   fp.count);
-      publish_progress(smc_data_JOB_RUNNING,
-                       "program rewritten to " + std::to_string(fp.count) + " passes");
+      const std::string what =
+          speed ? fmt::format("spindle speed changed to {:.0f} rpm (chatter at {:.0f} Hz)", e.value,
+                              e.frequency_hz)
+                : "program rewritten to " + std::to_string(job->program.count) + " passes";
+      spdlog::warn("{}: {}", opt.machine_id, what);
+      publish_progress(smc_data_JOB_RUNNING, what);
+      break;
+    }
+    case EventKind::kToolBroken: {
+      // The supervisor holds the feed (SMC II+, step 9); the job ends here
+      // and the cell hears why.
+      job->failure = fmt::format(
+          "tool breakage at {:.3f} s in pass {}: tooth window {} lost {:.0f} % of the mean "
+          "window force to the next; feed held{}",
+          e.t_s, e.pass_index + 1, e.module + 1, 100.0 * e.value,
+          e.ratio > 0 ? ", tool retracted"
+                      : " (this drive cannot retract: clear the tool by hand)");
+      spdlog::error("{}: {}", opt.machine_id, job->failure);
       break;
     }
     case EventKind::kFault: {

@@ -3,9 +3,12 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
+#include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "smc/edge/service.hpp"
+#include "smc_config.pb.h"
 
 namespace smc::edge::cli {
 
@@ -58,12 +61,23 @@ void add_run(CLI::App& app) {
   sub->add_flag("--paced", opt->paced,
                 "Run the simulated mill paced to the wall clock instead of in the real-time loop\n"
                 "(no deadlines, no overrun holds; implied by --speedup other than 1)");
+  auto breaks = std::make_shared<std::vector<std::string>>();
+  sub->add_option("--break-tooth", *breaks,
+                  "Simulated mill only: tooth T breaks S s into every job, T@S or T@S:MM\n"
+                  "(repeatable), to see module N stop a job (SMC II+)");
   auto overrun_ms = std::make_shared<double>(2.0);
   sub->add_option("--overrun-ms", *overrun_ms,
                   "A real-time tick this late is an overrun and holds the feed")
       ->capture_default_str()
       ->check(CLI::Range(0.1, 1000.0));
-  sub->callback([opt, lease_ms, no_rt, overrun_ms] {
+  sub->callback([opt, lease_ms, no_rt, overrun_ms, breaks] {
+    if (!breaks->empty() && opt->drive != "sim") {
+      throw Failure(2, "--break-tooth: only the simulated mill can break a tooth on request");
+    }
+    smc::config::SimulatedMill sim;
+    for (const auto& spec : *breaks) add_tooth_break(spec, sim);
+    for (const auto& b : sim.tooth_breaks())
+      opt->tooth_breaks.push_back({b.tooth(), b.at_s(), b.edge_loss_mm()});
     if (opt->drive == "linuxcnc" && opt->speedup != 1.0) {
       throw Failure(2, "--speedup: LinuxCNC runs in real time (its servo thread paces the loop)");
     }

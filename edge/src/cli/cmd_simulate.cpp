@@ -88,6 +88,13 @@ void print_summary(const smc::config::RunSummary& s, const std::string& out) {
   if (s.detection_delay_s() >= 0)
     std::printf(" (%.0f ms after onset)", 1000 * s.detection_delay_s());
   std::printf("\n");
+  if (s.spindle_speed_changes() > 0) {
+    std::printf("  spindle speed changed %u time(s) against chatter; last pass at %.0f rpm\n",
+                s.spindle_speed_changes(), s.final_spindle_rpm());
+  }
+  if (s.tool_broken_s() >= 0) {
+    std::printf("  TOOL BROKEN: module N stopped the feed at %.4f s\n", s.tool_broken_s());
+  }
   for (const auto& f : s.faults()) std::printf("  fault: %s\n", f.c_str());
   std::printf(
       "  wrote %s/{samples.csv,revolutions.csv,events.csv,summary.json,force.svg,"
@@ -97,6 +104,21 @@ void print_summary(const smc::config::RunSummary& s, const std::string& out) {
 
 }  // namespace
 
+void add_tooth_break(const std::string& spec, smc::config::SimulatedMill& sim) {
+  unsigned tooth = 0;
+  double at = -1, loss = 0;
+  int used = 0;
+  const int n = std::sscanf(spec.c_str(), "%u@%lf%n:%lf%n", &tooth, &at, &used, &loss, &used);
+  if (n < 2 || used != static_cast<int>(spec.size()) || tooth == 0 || !(at >= 0) || !(loss >= 0)) {
+    throw Failure(2, "--break-tooth " + spec + ": give T@S or T@S:MM (tooth from 1, time " +
+                         "in s, edge lost in mm), e.g. 2@12.5 or 2@12.5:0.05");
+  }
+  auto* b = sim.add_tooth_breaks();
+  b->set_tooth(tooth);
+  b->set_at_s(at);
+  b->set_edge_loss_mm(loss);
+}
+
 void add_simulate(CLI::App& app) {
   auto args = std::make_shared<SimulateArgs>();
   CLI::App* sub = app.add_subcommand(
@@ -104,7 +126,9 @@ void add_simulate(CLI::App& app) {
       "Run one part program in virtual time on the simulated mill (or a recorded force file)\n"
       "and write per-sample and per-revolution CSV, a JSON summary and SVG plots. With\n"
       "--drive linuxcnc the same run is cut in real time by the LinuxCNC running on this host\n"
-      "(deploy/linuxcnc/run.sh start --dyno CONFIG), with the same outputs.");
+      "(deploy/linuxcnc/run.sh start --dyno CONFIG), with the same outputs. Exit 0: the\n"
+      "program completed; 3: not within --max-time; 4: LinuxCNC fault; 5: the tool broke\n"
+      "(module N held the feed; the run stops a second later).");
   sub->add_option("--config", args->config,
                   "Supervisor configuration (textproto or JSON), e.g.\n"
                   "edge/configs/smc2.textproto")
@@ -178,22 +202,7 @@ void add_simulate(CLI::App& app) {
         cutter->add_radial_runout_um(r);
       }
     }
-    for (const auto& spec : args->breaks) {
-      // T@S or T@S:MM
-      unsigned tooth = 0;
-      double at = -1, loss = 0;
-      int used = 0;
-      const int n = std::sscanf(spec.c_str(), "%u@%lf%n:%lf%n", &tooth, &at, &used, &loss, &used);
-      if (n < 2 || used != static_cast<int>(spec.size()) || tooth == 0 || !(at >= 0) ||
-          !(loss >= 0)) {
-        throw Failure(2, "--break-tooth " + spec + ": give T@S or T@S:MM (tooth from 1, time " +
-                             "in s, edge lost in mm), e.g. 2@12.5 or 2@12.5:0.05");
-      }
-      auto* b = raw.mutable_simulation()->add_tooth_breaks();
-      b->set_tooth(tooth);
-      b->set_at_s(at);
-      b->set_edge_loss_mm(loss);
-    }
+    for (const auto& spec : args->breaks) add_tooth_break(spec, *raw.mutable_simulation());
     if (args->wear_per_m >= 0) raw.mutable_simulation()->set_wear_per_m(args->wear_per_m);
     RunOptions opts;
     opts.max_time_s = args->max_time_s;
@@ -300,6 +309,10 @@ void add_simulate(CLI::App& app) {
       }
       const std::string why = cnc->fault();
       if (!why.empty()) throw Failure(4, "LinuxCNC: " + why + " (the feed is held)");
+    }
+    if (run.tool_broken_s >= 0) {
+      throw Failure(5, "the tool broke at " + std::to_string(run.tool_broken_s) +
+                           " s (module N); the feed is held and the job fails");
     }
     if (!run.completed) throw Failure(3, "the program did not complete within --max-time");
   });

@@ -51,6 +51,10 @@ const char* to_string(EventKind k) noexcept {
       return "pass_completed";
     case EventKind::kProgramDone:
       return "program_done";
+    case EventKind::kToolBroken:
+      return "tool_broken";
+    case EventKind::kSpeedChanged:
+      return "speed_changed";
   }
   return "unknown";
 }
@@ -74,6 +78,7 @@ EdgeCore::EdgeCore(EdgeConfig config, Drive& drive, const ModuleRegistry& regist
     m->attach(running_);
     if (m->takes_samples()) add(schedule_.sample, schedule_.n_sample, m);
     if (m->starts_on_activation()) add(schedule_.starting, schedule_.n_starting, m);
+    if (m->resets_on_activation()) restarting_ = static_cast<ModuleMask>(restarting_ | bit(e.id));
     if (m->supervisory() && is_active(config_.modules, e.id)) {
       supervisory_ = static_cast<ModuleMask>(supervisory_ | bit(e.id));
     }
@@ -100,6 +105,13 @@ EdgeCore::EdgeCore(EdgeConfig config, Drive& drive, const ModuleRegistry& regist
           std::string("module ") + letter(static_cast<ModuleId>(i)) + " is not one this edge has",
           "use the modules of the edge's registry"});
     }
+  }
+  if (is_active(config_.modules, ModuleId::O) && !drive_.can_change_spindle_speed()) {
+    throw ConfigError(common::Diagnostic{
+        "supervisor_config.modules",
+        "module O (spindle-speed chatter suppressor) needs a drive that can change the spindle "
+        "speed, and this one cannot",
+        "use SMC II (added passes) on this machine, or a drive with a spindle speed override"});
   }
   supervisor_ = config_.grafcet ? std::make_unique<OperationSupervisor>(*config_.grafcet)
                                 : std::make_unique<OperationSupervisor>(
@@ -135,6 +147,8 @@ void EdgeCore::start() {
   last_pass_ = -1;
   last_in_pass_ = false;
   last_done_ = false;
+  speed_change_pass_ = -1;
+  applied_speed_rpm_ = 0;
   batch_ = ForceBatchRecord{};
 }
 
@@ -183,7 +197,9 @@ ModuleMask EdgeCore::apply_situation() noexcept {
   const ModuleMask after = static_cast<ModuleMask>(situation_.active & config_.modules);
   // Impulse actions reset modules; a routine that becomes active starts afresh.
   ModuleMask resets = static_cast<ModuleMask>(situation_.impulses & config_.modules);
-  resets = static_cast<ModuleMask>(resets | (after & ~before & bit(ModuleId::G)));
+  resets = static_cast<ModuleMask>(resets | (after & ~before & restarting_));
+  // Receptivity h: module O has had its go in this pass.
+  if ((after & ~before & bit(ModuleId::O)) != 0) speed_change_pass_ = running_.current_pass;
   for (int i = 0; i < kMaxModules; ++i) {
     Module* m = modules_[static_cast<size_t>(i)].get();
     if ((resets & (1u << i)) == 0 || m == nullptr) continue;
@@ -226,6 +242,7 @@ void EdgeCore::tick(bool overrun) noexcept {
   s_.operator_inputs = pending_inputs_;
   s_.f_y_updated = false;
   s_.program_rewritten = false;
+  const bool broken_before = s_.tool_broken;  // N decides on samples
 
   // 1. The machine: apply the last feed command, read the sample.
   if (drive_.step(s_.feedrate_cmd_mm_s, drive_sample_) != Status::kOk) {
@@ -237,6 +254,9 @@ void EdgeCore::tick(bool overrun) noexcept {
   s_.programmed_feedrate_mm_s = drive_sample_.programmed_feedrate_mm_s;
   s_.in_pass = drive_sample_.in_pass;
   s_.spindle_power_w = drive_sample_.spindle_power_w;
+  s_.engagement = drive_sample_.engagement;
+  s_.speed_changed_in_pass =
+      speed_change_pass_ >= 0 && speed_change_pass_ == drive_sample_.pass_index;
   const int pass = drive_sample_.pass_index;
   const double planned = pass >= 0 && pass < running_.program.count
                              ? running_.program.passes[static_cast<size_t>(pass)].force_reference_n
@@ -266,6 +286,7 @@ void EdgeCore::tick(bool overrun) noexcept {
   if (overrun) raise_fault(Fault::kOverrun, -1, 0);
   if (sample_ok) {
     s_.sample = f;
+    s_.revolution_phase = revolution_phase_;
     for (int i = 0; i < schedule_.n_sample; ++i) {
       Module& m = *schedule_.sample[static_cast<size_t>(i)];
       if (is_active(s_.active | supervisory_, m.id())) run_module(m, true);
@@ -303,6 +324,23 @@ void EdgeCore::tick(bool overrun) noexcept {
       Module& m = *schedule_.event[static_cast<size_t>(i)];
       if (is_active(config_.modules, m.id()) && m.requested(s_)) run_module(m, false);
     }
+    // O's speed command: to the drive, and the program's passes from here on.
+    if (s_.spindle_speed_cmd_rpm > 0 && s_.spindle_speed_cmd_rpm != applied_speed_rpm_) {
+      applied_speed_rpm_ = s_.spindle_speed_cmd_rpm;
+      FixedProgram& prog = running_.program;
+      for (int i = std::max(0, running_.current_pass); i < prog.count; ++i) {
+        prog.passes[static_cast<size_t>(i)].spindle_rpm = applied_speed_rpm_;
+      }
+      ++prog.revision;
+      if (drive_.change_spindle_speed(applied_speed_rpm_) != Status::kOk) {
+        raise_fault(Fault::kDriveError, -1, applied_speed_rpm_);
+      }
+      programs_.try_push(prog);
+      EdgeEvent e = make_event(EventKind::kSpeedChanged);
+      e.value = applied_speed_rpm_;
+      e.frequency_hz = s_.chatter_frequency_hz;
+      events_.try_push(e);
+    }
     if (s_.program_rewritten) {
       if (drive_.rewrite(running_.program, running_.current_pass) != Status::kOk) {
         raise_fault(Fault::kDriveError, -1, 0);
@@ -323,8 +361,10 @@ void EdgeCore::tick(bool overrun) noexcept {
     if ((started & bit(m.id())) != 0) run_module(m, false);
   }
 
-  // 6. Modules that act on this tick's decision (A, so a hold acts at once).
-  if (fast) {
+  // 6. Modules that act on this tick's decision (A, so a hold acts at once:
+  // also between fast periods when the feed hold C has just started, as
+  // when N latches a breakage on a sample).
+  if (fast || (started & bit(ModuleId::C)) != 0) {
     for (int i = 0; i < schedule_.n_after; ++i) {
       Module& m = *schedule_.after_supervisor[static_cast<size_t>(i)];
       if (is_active(s_.active | supervisory_, m.id())) run_module(m, false);
@@ -345,6 +385,16 @@ void EdgeCore::tick(bool overrun) noexcept {
     EdgeEvent e = make_event(EventKind::kChatterDetected);
     e.ratio = s_.chatter_ratio;
     e.frequency_hz = s_.chatter_frequency_hz;
+    events_.try_push(e);
+  }
+  if (s_.tool_broken && !broken_before) {
+    // The feed is held from this tick (step 9); the tool leaves the part
+    // where the drive can lift it.
+    const bool retracted = drive_.can_retract() && drive_.retract() == Status::kOk;
+    EdgeEvent e = make_event(EventKind::kToolBroken);
+    e.module = static_cast<int8_t>(s_.breakage_window);
+    e.value = s_.breakage_drop;
+    e.ratio = retracted ? 1.0 : 0.0;
     events_.try_push(e);
   }
   if (s_.chatter_signalled && fast) {

@@ -22,6 +22,8 @@ const char* variant_name(int v) {
       return "SMC I";
     case smc::config::SMC_II:
       return "SMC II";
+    case smc::config::SMC_II_PLUS:
+      return "SMC II+";
     default:
       return "unspecified";
   }

@@ -74,13 +74,20 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
           d.engagement, static_cast<int16_t>(d.pass_index), d.in_pass, s.contact, s.active,
           core.situation().active_steps});
     }
-    while (core.events().try_pop(ev)) run.events.push_back(ev);
+    while (core.events().try_pop(ev)) {
+      if (ev.kind == EventKind::kToolBroken && run.tool_broken_s < 0) run.tool_broken_s = ev.t_s;
+      run.events.push_back(ev);
+    }
     while (core.revolutions().try_pop(rev)) run.revolutions.push_back(rev);
     while (core.batches().try_pop(batch)) {
     }
     run.ticks = i + 1;
     if (core.done()) {
       run.completed = true;
+      break;
+    }
+    if (run.tool_broken_s >= 0 &&
+        core.drive_sample().force.t_s >= run.tool_broken_s + options.after_breakage_s) {
       break;
     }
   }
@@ -189,9 +196,12 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
   };
   std::vector<PassRun> runs;
   double done_t = -1, detected_t = -1;
-  uint32_t rewrites = 0, chatter = 0;
+  uint32_t rewrites = 0, chatter = 0, speed_changes = 0;
   for (const EdgeEvent& e : run.events) {
     switch (e.kind) {
+      case EventKind::kSpeedChanged:
+        ++speed_changes;
+        break;
       case EventKind::kPassStarted: {
         if (!runs.empty() && runs.back().open) runs.back().open = false;
         PassRun r;
@@ -236,6 +246,13 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
     }
   }
   sum.set_program_rewrites(rewrites);
+  sum.set_spindle_speed_changes(speed_changes);
+  sum.set_tool_broken_s(run.tool_broken_s);
+  {
+    const auto& prog = core.program();
+    sum.set_final_spindle_rpm(
+        prog.count > 0 ? prog.passes[static_cast<size_t>(prog.count - 1)].spindle_rpm : 0.0);
+  }
   sum.set_chatter_events(chatter);
   sum.set_chatter_detected_s(detected_t);
 

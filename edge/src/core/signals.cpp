@@ -28,6 +28,10 @@ const char* signal_name(Signal s) noexcept {
       return "feed_command";
     case Signal::kPowerLimit:
       return "power_limit";
+    case Signal::kToolBreakage:
+      return "tool_breakage";
+    case Signal::kSpeedChange:
+      return "speed_change";
   }
   return "";
 }
@@ -75,6 +79,12 @@ SignalMask changed_signals(const Signals& x, const Signals& y) noexcept {
   mark(differs(x.power_mean_w, y.power_mean_w) || differs(x.power_estimated, y.power_estimated) ||
            differs(x.force_reference_scale, y.force_reference_scale),
        Signal::kPowerLimit);
+  mark(differs(x.tool_broken, y.tool_broken) || differs(x.breakage_window, y.breakage_window) ||
+           differs(x.breakage_drop, y.breakage_drop),
+       Signal::kToolBreakage);
+  mark(differs(x.spindle_speed_cmd_rpm, y.spindle_speed_cmd_rpm) ||
+           differs(x.speed_change_done, y.speed_change_done),
+       Signal::kSpeedChange);
   return m;
 }
 

@@ -61,6 +61,10 @@ struct SimulatedMill::Impl {
   double wear_per_mm = 0;
   double cut_length_mm = 0;
   double worn_at_mm = 0;  // cut length at the last wear update
+  // Spindle: the speed it turns at, approaching the pass's at a fixed rate.
+  double rpm_now = 0;
+  double rpm_step = 0;     // rpm per sample period
+  bool retracted = false;  // lifted clear of the part (after a breakage)
 
   Impl(machining::MillingModel m, const smc::config::SimulatedMill& o, double period_s)
       : model(std::move(m)),
@@ -135,6 +139,12 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
   impl_ = std::make_unique<Impl>(std::move(m), sim, sample_period_s);
   Impl& s = *impl_;
   s.lag_gain = lag > 0 ? 1.0 - std::exp(-sample_period_s / lag) : 1.0;
+  const double accel = sim.spindle_accel_rpm_s() == 0 ? 2000.0 : sim.spindle_accel_rpm_s();
+  if (!(accel > 0) || !std::isfinite(accel)) {
+    throw ConfigError("simulation.spindle_accel_rpm_s: must be > 0 (got " + std::to_string(accel) +
+                      "); fix: 0 for the default 2000 rpm/s");
+  }
+  s.rpm_step = accel * sample_period_s;
   const auto steps = static_cast<std::size_t>(s.sim.steps_per_sample());
   s.trace_x.assign(steps, 0.0);
   s.trace_y.assign(steps, 0.0);
@@ -207,6 +217,23 @@ void SimulatedMill::load(const FixedProgram& program) {
   s.cut_length_mm = 0;
   s.worn_at_mm = 0;
   s.phase = program.count > 0 ? Phase::kCutting : Phase::kDone;
+  // The spindle is at the first pass's speed when the program starts.
+  s.rpm_now = program.count > 0 ? program.passes[0].spindle_rpm : 0.0;
+  s.retracted = false;
+}
+
+Status SimulatedMill::retract() noexcept {
+  impl_->retracted = true;
+  return Status::kOk;
+}
+
+Status SimulatedMill::change_spindle_speed(double rpm) noexcept {
+  Impl& s = *impl_;
+  if (!(rpm > 0) || !std::isfinite(rpm)) return Status::kError;
+  for (int i = std::max(0, s.pass); i < s.program.count; ++i) {
+    s.program.passes[static_cast<size_t>(i)].spindle_rpm = rpm;
+  }
+  return Status::kOk;
 }
 
 Status SimulatedMill::rewrite(const FixedProgram& program, int from) noexcept {
@@ -225,14 +252,15 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   const int pass = std::min(s.pass, std::max(0, s.program.count - 1));
   const PassSpec& spec = s.program.passes[static_cast<size_t>(pass)];
   machining::SampleInput in;
-  in.spindle_rpm = spec.spindle_rpm;
+  s.rpm_now += std::clamp(spec.spindle_rpm - s.rpm_now, -s.rpm_step, s.rpm_step);
+  in.spindle_rpm = s.rpm_now;
   const double target = s.program.depth_before(pass + 1);
   if (s.phase == Phase::kCutting) {
     s.axis_feed_mm_s += s.lag_gain * (std::max(0.0, feedrate_cmd_mm_s) - s.axis_feed_mm_s);
     in.feedrate_mm_s = s.lag_gain == 1.0 ? std::max(0.0, feedrate_cmd_mm_s) : s.axis_feed_mm_s;
     // The chip depth where the leading edge meets material left by earlier passes.
     const double edge = std::min(s.length(), s.sim.tool_position_mm() + s.radius());
-    in.depth_mm = std::max(0.0, target - s.removed_at(std::max(0.0, edge)));
+    in.depth_mm = s.retracted ? 0.0 : std::max(0.0, target - s.removed_at(std::max(0.0, edge)));
   }
   // The tool's condition at this sample: breaks due, wear by the length cut.
   while (s.next_break < s.breaks.size() && s.breaks[s.next_break].at_s <= s.time_s) {
@@ -263,7 +291,7 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   }
   const double x = s.sim.tool_position_mm();
   out.force = ForceSample{s.time_s, fx, fy, fz};
-  out.spindle_rpm = spec.spindle_rpm;
+  out.spindle_rpm = s.rpm_now;
   out.depth_mm = spec.depth_mm;
   out.programmed_feedrate_mm_s = spec.feedrate_mm_s;
   out.feedrate_mm_s = in.feedrate_mm_s;

@@ -15,8 +15,10 @@ Status FeedrateRoutine::update(Signals& s) noexcept {
   // G holds the feed from the tick it becomes active (before its first
   // fast period has set suppression_hold) until it reports completion.
   const bool suppressing = (s.active & bit(ModuleId::G)) != 0 && !s.suppression_done;
-  const bool hold =
-      (s.active & bit(ModuleId::C)) != 0 || s.suppression_hold || suppressing || !s.in_pass;
+  // O holds it while the spindle changes speed, likewise.
+  const bool changing_speed = (s.active & bit(ModuleId::O)) != 0 && !s.speed_change_done;
+  const bool hold = (s.active & bit(ModuleId::C)) != 0 || s.suppression_hold || suppressing ||
+                    changing_speed || !s.in_pass;
   const bool control =
       (s.active & (bit(ModuleId::K) | bit(ModuleId::L))) != 0 && s.controller_valid;
   double feedrate = s.programmed_feedrate_mm_s;

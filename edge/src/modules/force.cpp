@@ -24,7 +24,11 @@ Status ForceSignalProcessor::update(Signals& s) noexcept {
 }
 
 Status ContactMonitor::update(Signals& s) noexcept {
-  s.contact = s.f_y_peak_n > threshold_;
+  // Contact is found on any revolution, lost only on one cut at a feed
+  // throughout (after a hold in the part the force builds up again).
+  const bool above = s.f_y_peak_n > threshold_;
+  if (above || !held_) s.contact = above;
+  held_ = false;
   return Status::kOk;
 }
 
@@ -212,8 +216,18 @@ void AdaptiveForceController::reset() noexcept { started_ = false; }
 
 Status AdaptiveForceController::update(Signals& s) noexcept {
   if (!started_) {
-    // Bumpless start from the programmed feed: no model to do better.
-    law_.start(p_.feed_per_tooth_for(s.programmed_feedrate_mm_s, s.spindle_rpm));
+    // Bumpless start from the programmed feed: no model to do better --
+    // except after a spindle speed change within the pass (module O), where
+    // the depth is the same and H's gain still holds: then the feed that
+    // gain gives for the new F_ref (P_max / V falls as the speed rises), if
+    // lower. Starting from the programmed feed there overshoots the power.
+    double start = p_.feed_per_tooth_for(s.programmed_feedrate_mm_s, s.spindle_rpm);
+    if (s.speed_changed_in_pass && s.gain_valid && s.gain_estimate > 0 && s.force_reference_n > 0) {
+      const double warm =
+          std::pow(s.force_reference_n / s.gain_estimate, 1.0 / p_.adaptive_feed_exponent);
+      if (std::isfinite(warm) && warm > 0) start = std::min(start, warm);
+    }
+    law_.start(start);
     started_ = true;
   } else if (s.f_y_updated && s.gain_valid) {
     law_.set_period(s.revolution_period_s);

@@ -18,13 +18,16 @@ const ModuleRegistry& paper_modules() {
   // scales F_ref from the revolution's power (while in contact), E
   // and H read the revolution's samples and F_Y, K and L read F_Y and H's
   // estimate. Fast modules: B reads the operator, D reads B, G reads E/D's
-  // decision (through the supervisor). F serves G's request. A reads the
+  // decision (through the supervisor). F serves G's request. N (tool
+  // breakage) takes samples; O (speed change) reads E's frequency when the
+  // supervisor starts it. A reads the
   // controllers and the supervisor's decision. C's activity is its action.
   static const ModuleRegistry kModules = {
       {ModuleId::I, &make<ForceSignalProcessor>},
       {ModuleId::J, &make<ContactMonitor>},
       {ModuleId::M, &make<SpindlePowerMonitor>},
       {ModuleId::E, &make<AutomaticChatterDetector>},
+      {ModuleId::N, &make<ToolBreakageDetector>},
       {ModuleId::H, &make<ParameterEstimator>},
       {ModuleId::K, &make<AdaptiveForceController>},
       {ModuleId::L, &make<ModelBasedForceController>},
@@ -32,6 +35,7 @@ const ModuleRegistry& paper_modules() {
       {ModuleId::D, &make<OperatorChatterDetector>},
       {ModuleId::G, &make<ChatterSuppressionRoutine>},
       {ModuleId::F, &make<ChatterSuppressor>},
+      {ModuleId::O, &make<SpindleSpeedChatterSuppressor>},
       {ModuleId::A, &make<FeedrateRoutine>},
       {ModuleId::C, &make<FeedHold>},
   };

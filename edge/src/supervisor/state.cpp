@@ -9,6 +9,9 @@ uint32_t receptivities(const Signals& s, bool fault_hold) noexcept {
   if (s.chatter_signalled) in |= 1u << kInputC;
   if (s.chatter_detected) in |= 1u << kInputD;
   if (s.suppression_done) in |= 1u << kInputE;
+  if (s.tool_broken) in |= 1u << kInputF;
+  if (s.speed_change_done) in |= 1u << kInputG;
+  if (s.speed_changed_in_pass) in |= 1u << kInputH;
   return in;
 }
 

@@ -20,9 +20,9 @@ using namespace smc::edge;
 
 namespace {
 
-constexpr auto kM = static_cast<ModuleId>(13);  // N: the first letter the project does not use
+constexpr auto kM = static_cast<ModuleId>(15);  // P: the first letter the project does not use
 
-// Test-only module N: runs once per revolution after I and J, writes nothing.
+// Test-only module P: runs once per revolution after I and J, writes nothing.
 // Records what it saw, so the test can check when it ran.
 struct Seen {
   int updates = 0;
@@ -44,7 +44,7 @@ class RevolutionWitness final : public Module {
   }
 };
 
-// Test-only module N that writes a signal it does not declare.
+// Test-only module P that writes a signal it does not declare.
 class Trespasser final : public Module {
  public:
   Trespasser() noexcept : Module(kM) {}
@@ -72,15 +72,15 @@ ModuleRegistry with_module_m() {
   return r;
 }
 
-// SMC I with module N active while in contact (step 4).
+// SMC I with module P active while in contact (step 4).
 smc::config::SupervisorConfig smc1_with_m() {
   auto cfg = test::shipped_config("smc1.textproto");
-  cfg.add_modules("N");
+  cfg.add_modules("P");
   std::string g = cfg.grafcet_text();
   const std::string action_l = "action L \"model-based force controller\"\n";
   const std::string step4 = "A, B, I, J, L\n";
-  g.replace(g.find(action_l), action_l.size(), action_l + "action N \"test-only witness\"\n");
-  g.replace(g.find(step4), step4.size(), "A, B, I, J, L, N\n");
+  g.replace(g.find(action_l), action_l.size(), action_l + "action P \"test-only witness\"\n");
+  g.replace(g.find(step4), step4.size(), "A, B, I, J, L, P\n");
   cfg.set_grafcet_text(g);
   return cfg;
 }
@@ -88,7 +88,8 @@ smc::config::SupervisorConfig smc1_with_m() {
 }  // namespace
 
 TEST(ModuleDeclarations, PaperRunsStayWithinTheirDeclaredWrites) {
-  for (const char* name : {"smc1.textproto", "smc1_guarded.textproto", "smc2.textproto"}) {
+  for (const char* name :
+       {"smc1.textproto", "smc1_guarded.textproto", "smc2.textproto", "smc2_plus.textproto"}) {
     const auto raw = test::shipped_config(name);
     const EdgeConfig cfg = edge_config_from_proto(raw);
     SimulatedMill mill(raw.milling_model(), raw.simulation(), cfg.params.sample_period_s);
@@ -160,7 +161,7 @@ TEST(ModuleDeclarations, ATestOnlyModuleRunsAtItsDeclaredPeriodInDataFlowOrder) 
   EdgeCore core(cfg, mill, reg);
   core.set_check_declarations(true);
   core.start();
-  // N runs in a revolution tick when the previous tick's situation enabled it.
+  // P runs in a revolution tick when the previous tick's situation enabled it.
   int expected = 0;
   ModuleMask active_before = 0;
   RunOptions opts;

@@ -461,3 +461,230 @@ TEST(OperatorModules, HoldIsALevelAndChatterIsOnePulsePerSignal) {
   EXPECT_TRUE(s.feed_hold_requested);
   EXPECT_FALSE(s.chatter_signalled);
 }
+
+// J finds contact on any revolution but loses it only on one cut at a feed
+// throughout: after a hold in the part (a speed change, a suppression hold)
+// the force builds up again and the low F_Y of that revolution is no exit.
+TEST(ContactMonitor, LosesContactOnlyOnARevolutionAtFeed) {
+  ContactMonitor j;
+  j.configure(params());
+  j.reset();
+  Signals s;
+  s.in_pass = true;
+  auto revolution = [&](double feed, double f_y) {
+    for (int k = 0; k < 10; ++k) {
+      s.feedrate_cmd_mm_s = k < 5 ? feed : 10.0;
+      j.on_sample(s);
+    }
+    s.f_y_peak_n = f_y;
+    EXPECT_EQ(j.update(s), Status::kOk);
+    return s.contact;
+  };
+  EXPECT_TRUE(revolution(10, 200));
+  EXPECT_TRUE(revolution(0, 20)) << "held for half the revolution: contact kept";
+  EXPECT_FALSE(revolution(10, 20)) << "cut at feed throughout: contact lost";
+  EXPECT_TRUE(revolution(0, 200));
+  j.reset();  // on activation: the first revolution is partial
+  s.feedrate_cmd_mm_s = 10;
+  s.f_y_peak_n = 20;
+  EXPECT_EQ(j.update(s), Status::kOk);
+  EXPECT_TRUE(s.contact);
+  EXPECT_FALSE(revolution(10, 20));
+}
+
+// ------------------------------------------------- modules beyond Table 1
+
+namespace {
+
+// A synthetic 4-tooth cut at 1500 rpm for module N: each tooth window's
+// resultant force is `level[w]`, with a +-10 % ripple inside the window and
+// a little deterministic noise; `feed` is the commanded feed per tooth.
+struct ToothCut {
+  ToolBreakageDetector n;
+  EdgeParameters p = params();
+  Signals s;
+  double t = 0;
+  int k = 0;
+  ToothCut() {
+    n.configure(p);
+    n.reset();
+    s.feed_per_tooth_cmd_mm = 0.1;
+  }
+  // One revolution; returns the sample index within it at which f rose (-1: none).
+  int revolution(const double (&level)[4]) {
+    const int spr = p.samples_per_revolution;
+    for (int i = 0; i < spr; ++i) {
+      t += p.sample_period_s;
+      ++k;
+      s.revolution_phase = static_cast<double>(i) / spr;
+      const int w = std::min(3, 4 * i / spr);
+      const double inside = static_cast<double>(4 * i % spr) / spr;  // 0..1 in the window
+      const double f = level[w] * (1.0 + 0.1 * std::sin(2 * std::numbers::pi * inside)) +
+                       1.5 * std::sin(0.7 * k) * std::cos(1.3 * k);
+      s.sample = ForceSample{t, 0.6 * f, 0.8 * f, 0};
+      const bool before = s.tool_broken;
+      EXPECT_EQ(n.on_sample(s), Status::kOk);
+      if (s.tool_broken && !before) return i;
+    }
+    return -1;
+  }
+};
+
+}  // namespace
+
+TEST(ToolBreakageDetector, ABrokenToothIsSeenWithinTheRevolutionAfterTheBreak) {
+  ToothCut cut;
+  const double intact[4] = {300, 300, 300, 300};
+  for (int r = 0; r < 10; ++r) ASSERT_EQ(cut.revolution(intact), -1) << "revolution " << r;
+  // Tooth 2 loses its edge: its window falls, the next one takes its chip.
+  const double broken[4] = {300, 60, 540, 300};
+  const int at = cut.revolution(broken);
+  ASSERT_GE(at, 0) << "not detected within the first revolution after the break";
+  const int spr = cut.p.samples_per_revolution;
+  EXPECT_LT(at, spr / 4 + spr / 8 + 2) << "seen from half the broken window on";
+  EXPECT_EQ(cut.s.breakage_window, 1);
+  EXPECT_GT(cut.s.breakage_drop, 0.6);
+  // Latched until reset.
+  EXPECT_EQ(cut.revolution(intact), -1);
+  EXPECT_TRUE(cut.s.tool_broken);
+}
+
+TEST(ToolBreakageDetector, CommonChangesAreNotBreaks) {
+  ToothCut cut;
+  double level[4] = {300, 300, 300, 300};
+  for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(level), -1);
+  // A feed or depth change over a revolution (the controller's steps are a
+  // fast period, a quarter revolution here): the windows fall 10, 20, 30 and
+  // 40 %, then stay; later they rise back the same way.
+  for (int w = 0; w < 4; ++w) level[w] = 300 * (1.0 - 0.1 * (w + 1));
+  EXPECT_EQ(cut.revolution(level), -1);
+  for (double& v : level) v = 180;
+  EXPECT_EQ(cut.revolution(level), -1);
+  for (int r = 0; r < 3; ++r) EXPECT_EQ(cut.revolution(level), -1);
+  for (int w = 0; w < 4; ++w) level[w] = 180 + 30 * (w + 1);
+  EXPECT_EQ(cut.revolution(level), -1);
+  for (double& v : level) v = 300;
+  EXPECT_EQ(cut.revolution(level), -1);
+  // Runout: unequal windows that repeat every revolution.
+  const double runout[4] = {420, 330, 180, 270};
+  for (int r = 0; r < 6; ++r) EXPECT_EQ(cut.revolution(runout), -1);
+  // Exit: the windows fall one after the other by a share that grows with
+  // each revolution (one side of the cutter leaves the part first).
+  double leaving[4] = {420, 330, 180, 270};
+  for (int r = 1; r <= 8; ++r) {
+    for (int w = 0; w < 4; ++w) leaving[w] *= 1.0 - 0.04 * r * (1 + w) / 4.0;
+    EXPECT_EQ(cut.revolution(leaving), -1) << "exit revolution " << r;
+  }
+  // Too little force to judge (below 0.75 x the contact threshold).
+  ToothCut air;
+  const double light[4] = {30, 30, 30, 30};
+  for (int r = 0; r < 6; ++r) ASSERT_EQ(air.revolution(light), -1);
+  const double light_broken[4] = {30, 5, 55, 30};
+  EXPECT_EQ(air.revolution(light_broken), -1);
+  EXPECT_FALSE(cut.s.tool_broken);
+}
+
+TEST(ToolBreakageDetector, AfterAFallingFeedAFallMustBeTakenUpByAnotherTooth) {
+  // With runout and a feed falling for a revolution, the least-loaded tooth's
+  // chip goes first: its window falls alone, no window rises. Not a break.
+  ToothCut cut;
+  double level[4] = {420, 330, 180, 270};
+  for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(level), -1);
+  cut.s.feed_per_tooth_cmd_mm = 0.08;
+  const double falling[4] = {400, 310, 160, 250};
+  EXPECT_EQ(cut.revolution(falling), -1);
+  cut.s.feed_per_tooth_cmd_mm = 0.06;
+  const double lost[4] = {380, 290, 40, 230};
+  EXPECT_EQ(cut.revolution(lost), -1) << "a chip lost to the falling feed";
+  EXPECT_EQ(cut.revolution(lost), -1);
+  // A real break while the feed falls: the next window takes the chip.
+  cut.s.feed_per_tooth_cmd_mm = 0.05;
+  const double falling2[4] = {370, 280, 40, 220};
+  EXPECT_EQ(cut.revolution(falling2), -1);
+  cut.s.feed_per_tooth_cmd_mm = 0.045;
+  const double broken[4] = {360, 60, 40, 440};
+  EXPECT_GE(cut.revolution(broken), 0) << "a break the next window confirms";
+  EXPECT_EQ(cut.s.breakage_window, 1);
+}
+
+TEST(ToolBreakageDetector, AGapInTheSamplesRestartsTheComparison) {
+  ToothCut cut;
+  const double intact[4] = {300, 300, 300, 300};
+  for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
+  cut.t += 1.0;  // N was inactive for a second (a hold); the cut changed meanwhile
+  const double other[4] = {300, 80, 300, 300};
+  for (int r = 0; r < 4; ++r) EXPECT_EQ(cut.revolution(other), -1) << r;
+  // A non-finite force is the module's error (the core holds the feed).
+  cut.s.sample.f_x_n = std::nan("");
+  EXPECT_EQ(cut.n.on_sample(cut.s), Status::kError);
+}
+
+TEST(SpindleSpeedChatterSuppressor, PicksTheHighestPocketWithinTheMachinesRange) {
+  EdgeParameters p = params();  // 4 teeth, 1000-3000 rpm here
+  p.min_spindle_rpm = 1000;
+  p.max_spindle_rpm = 3000;
+  p.speed_change_frequency_margin = 0.04;
+  p.speed_change_max_ratio = 2;
+  // 750 Hz chatter at 1500 rpm: tooth frequency 0.96 x 750 = 720 Hz / k.
+  // k = 1 is 10800 rpm, 2: 5400, 3: 3600 (above 3000), 4: 2700.
+  EXPECT_NEAR(SpindleSpeedChatterSuppressor::pick_speed(p, 750, 1500, 1500), 2700, 1e-9);
+  // Tlusty and Smith's plain rule (no margin): 2812.5 rpm.
+  EdgeParameters plain = p;
+  plain.speed_change_frequency_margin = 0;
+  EXPECT_NEAR(SpindleSpeedChatterSuppressor::pick_speed(plain, 750, 1500, 1500), 2812.5, 1e-9);
+  // Already at 2700: the next pocket down (k = 5, 2160 rpm).
+  EXPECT_NEAR(SpindleSpeedChatterSuppressor::pick_speed(p, 750, 1500, 2700), 2160, 1e-9);
+  // A ratio of 1.15 keeps it within [1304, 1725]: k = 7 is 1542.9 rpm; with
+  // the spindle at 1540 that is no change (within 2 %), so k = 8: 1350.
+  p.speed_change_max_ratio = 1.15;
+  EXPECT_NEAR(SpindleSpeedChatterSuppressor::pick_speed(p, 750, 1500, 1500), 60.0 * 720 / 28, 1e-9);
+  EXPECT_NEAR(SpindleSpeedChatterSuppressor::pick_speed(p, 750, 1500, 1540), 1350, 1e-9);
+  // Nothing usable: 0.
+  EXPECT_EQ(SpindleSpeedChatterSuppressor::pick_speed(p, 0, 1500, 1500), 0);
+  EXPECT_EQ(SpindleSpeedChatterSuppressor::pick_speed(p, std::nan(""), 1500, 1500), 0);
+  p.min_spindle_rpm = 1490;
+  p.max_spindle_rpm = 1510;
+  EXPECT_EQ(SpindleSpeedChatterSuppressor::pick_speed(p, 750, 1500, 1500), 0);
+}
+
+TEST(SpindleSpeedChatterSuppressor, HoldsUntilTheSpindleIsAtSpeedOrTimesOut) {
+  EdgeParameters p = params();
+  p.min_spindle_rpm = 1000;
+  p.max_spindle_rpm = 3000;
+  SpindleSpeedChatterSuppressor o;
+  o.configure(p);
+  o.reset();
+  Signals s;
+  s.spindle_rpm = 1500;
+  s.chatter_frequency_hz = 750;
+  ASSERT_EQ(o.update(s), Status::kOk);
+  EXPECT_NEAR(s.spindle_speed_cmd_rpm, 2700, 1e-9);
+  EXPECT_FALSE(s.speed_change_done);
+  s.spindle_rpm = 2000;
+  EXPECT_EQ(o.update(s), Status::kOk);
+  EXPECT_FALSE(s.speed_change_done);
+  s.spindle_rpm = 2690;  // within 1 %
+  EXPECT_EQ(o.update(s), Status::kOk);
+  EXPECT_TRUE(s.speed_change_done);
+  // A spindle that never gets there: an error after the timeout.
+  o.reset();
+  o.clear_outputs(s);
+  s.spindle_rpm = 1500;
+  ASSERT_EQ(o.update(s), Status::kOk);
+  Status st = Status::kOk;
+  int ticks = 0;
+  while (st == Status::kOk && ticks < 10000) {
+    st = o.update(s);
+    ++ticks;
+  }
+  EXPECT_EQ(st, Status::kError);
+  EXPECT_NEAR(ticks * p.fast_period_s, p.speed_change_timeout_s, 2 * p.fast_period_s);
+  // No usable speed: done at once, without a command (the next chatter of
+  // the pass adds a pass).
+  o.reset();
+  o.clear_outputs(s);
+  s.chatter_frequency_hz = 0;
+  ASSERT_EQ(o.update(s), Status::kOk);
+  EXPECT_TRUE(s.speed_change_done);
+  EXPECT_EQ(s.spindle_speed_cmd_rpm, 0);
+}

@@ -93,6 +93,40 @@ TEST(ShdrModel, ChatterIsAWarningUntilTheEdgeCutsWithoutIt) {
   EXPECT_TRUE(has(m.on_summary(f, kT + 3), "|mill-1:chatter|NORMAL||||"));
 }
 
+// SMC II+: the speed change is the chatter's remedy in its message, and a
+// job that module N stopped makes the tool condition a fault until the next
+// job runs.
+TEST(ShdrModel, ASpeedChangeIsTheRemedyAndABreakageIsAToolFault) {
+  mt::ShdrModel m(0);
+  m.on_status(status(smc_data_EDGE_RUNNING), kT);
+  smc_data_ChatterEvent e{};
+  smc::wire::set_string(e.machine_id, "mill-1");
+  smc::wire::set_string(e.job_id, "job-000008");
+  e.source = smc_data_CHATTER_AUTOMATIC;
+  e.frequency_hz = 749.7f;
+  e.new_pass_count = 1;
+  e.new_spindle_rpm = 2700;
+  EXPECT_TRUE(has(m.on_chatter(e, kT + 1),
+                  "|mill-1:chatter|WARNING|CHATTER_AUTOMATIC||HIGH|chatter detected in pass 1 "
+                  "at 750 Hz; spindle speed now 2700 rpm (job job-000008)"));
+  smc_data_JobProgress p{};
+  smc::wire::set_string(p.machine_id, "mill-1");
+  smc::wire::set_string(p.job_id, "job-000008");
+  smc::wire::set_string(p.message, "tool breakage at 12.505 s in pass 1: tooth window 4 lost 65 %");
+  p.phase = smc_data_JOB_FAILED;
+  EXPECT_TRUE(has(m.on_progress(p, kT + 2),
+                  "|mill-1:tool|FAULT|TOOL_BREAKAGE||HIGH|tool breakage at 12.505 s in pass 1: "
+                  "tooth window 4 lost 65 % (job job-000008)"));
+  smc::wire::set_string(p.job_id, "job-000009");
+  smc::wire::set_string(p.message, "");
+  p.phase = smc_data_JOB_RUNNING;
+  EXPECT_TRUE(has(m.on_progress(p, kT + 3), "|mill-1:tool|NORMAL||||"));
+  // Another job's failure is no tool fault.
+  smc::wire::set_string(p.message, "stopped before the end");
+  p.phase = smc_data_JOB_FAILED;
+  EXPECT_FALSE(has(m.on_progress(p, kT + 4), "|mill-1:tool|FAULT"));
+}
+
 TEST(ShdrModel, SamplesAreRateLimitedAndFeedOverrideIsAgainstTheProgram) {
   mt::ShdrModel m(100'000'000);
   smc::config::SupervisorConfig c;
@@ -127,14 +161,14 @@ TEST(ShdrModel, AGoneEdgeMakesItsMillUnavailableAndANewAgentGetsEverything) {
   EXPECT_TRUE(has(l, "|mill-1:exec|UNAVAILABLE"));
   EXPECT_TRUE(has(l, "|mill-1:edge_fault|UNAVAILABLE||||"));
   const auto snap = m.snapshot(kT + 2);
-  EXPECT_EQ(snap.size(), 12u) << "every data item of the mill";
+  EXPECT_EQ(snap.size(), 13u) << "every data item of the mill";
   EXPECT_TRUE(has(snap, "|mill-1:program|job-000007"));
 }
 
 TEST(ShdrModel, TheDeviceFileDeclaresEveryItemOnce) {
   const std::string x = mt::devices_xml({"mill-1", "mill-2"});
   for (const char* item : {"avail", "exec", "program", "block", "smc", "Srpm", "path_feedrate",
-                           "feed_ovr", "Fy", "power", "chatter", "edge_fault"}) {
+                           "feed_ovr", "Fy", "power", "chatter", "tool", "edge_fault"}) {
     const std::string id = std::string("id=\"mill-2_") + item + "\"";
     EXPECT_NE(x.find(id), std::string::npos) << item;
     EXPECT_EQ(x.find(id), x.rfind(id)) << item;

@@ -51,6 +51,9 @@ enum class EventKind : uint8_t {
   kPassStarted,
   kPassCompleted,
   kProgramDone,
+  kToolBroken,    // N latched a breakage: window in `module`, its drop in `value`,
+                  // `ratio` 1 when the drive retracted the tool
+  kSpeedChanged,  // O changed the spindle speed: the new speed in `value` (rpm)
 };
 const char* to_string(EventKind k) noexcept;
 
@@ -169,6 +172,11 @@ class EdgeCore {
   // Configured modules that run under the state supervisor (M), whatever
   // the operation supervisor's situation.
   ModuleMask supervisory_ = 0;
+  // Modules reset whenever they become active (G, O).
+  ModuleMask restarting_ = 0;
+  // The pass in which module O last ran (-1: none): receptivity h.
+  int speed_change_pass_ = -1;
+  double applied_speed_rpm_ = 0;  // O's last command passed to the drive
   void emit(EventKind kind) noexcept;
   EdgeEvent make_event(EventKind kind) const noexcept;
 

@@ -44,6 +44,17 @@ class Drive {
   // the start and continues with pass `from` of the new program.
   virtual Status rewrite(const FixedProgram& program, int from) noexcept = 0;
   virtual double sample_period_s() const noexcept = 0;
+  // Whether change_spindle_speed() works on this drive (module O needs it).
+  virtual bool can_change_spindle_speed() const noexcept { return false; }
+  // Real-time: turn the spindle at `rpm` from now on, for the rest of the
+  // program (a spindle speed override on a CNC); the speed the spindle
+  // reaches shows in DriveSample::spindle_rpm.
+  virtual Status change_spindle_speed(double /*rpm*/) noexcept { return Status::kError; }
+  // Whether retract() works on this drive (after a tool breakage).
+  virtual bool can_retract() const noexcept { return false; }
+  // Real-time: lift the tool clear of the part where it stands (the feed is
+  // held); it stays there until the program is loaded again.
+  virtual Status retract() noexcept { return Status::kError; }
 };
 
 }  // namespace smc::edge

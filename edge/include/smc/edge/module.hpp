@@ -51,6 +51,9 @@ class Module {
   // supervisor and before the after_supervisor() modules (K, L: the feed to
   // start from, so that A never falls back to the programmed feed).
   virtual bool starts_on_activation() const noexcept { return false; }
+  // A routine that starts afresh whenever it becomes active, as if its
+  // Grafcet step also reset it (G, O): the core resets it on activation.
+  virtual bool resets_on_activation() const noexcept { return false; }
   // Runs under the state supervisor whenever it is configured (M), not as an
   // action of the operation supervisor: the Grafcet neither names nor
   // switches it.

@@ -118,6 +118,7 @@ class ChatterSuppressionRoutine final : public Module {
   ChatterSuppressionRoutine() noexcept : Module(ModuleId::G) {}
   Period period() const noexcept override { return Period::kFast; }
   SignalMask writes() const noexcept override { return mask(Signal::kSuppression); }
+  bool resets_on_activation() const noexcept override { return true; }
   void configure(const EdgeParameters& p) override { p_ = p; }
   void reset() noexcept override {
     started_ = false;
@@ -176,12 +177,23 @@ class ContactMonitor final : public Module {
   ContactMonitor() noexcept : Module(ModuleId::J) {}
   Period period() const noexcept override { return Period::kRevolution; }
   SignalMask writes() const noexcept override { return mask(Signal::kContact); }
+  bool takes_samples() const noexcept override { return true; }
+  // Its first revolution after activation is partial: reset then.
+  bool resets_on_activation() const noexcept override { return true; }
   void configure(const EdgeParameters& p) override { threshold_ = p.contact_threshold_n; }
-  void reset() noexcept override {}
+  void reset() noexcept override { held_ = true; }
+  // Notes a revolution in which the feed was held in the pass (J was not
+  // active for part of it, or the feed was zero): its low F_Y says nothing
+  // about the tool having left the part.
+  Status on_sample(Signals& s) noexcept override {
+    held_ = held_ || (s.in_pass && !(s.feedrate_cmd_mm_s > 0));
+    return Status::kOk;
+  }
   Status update(Signals& s) noexcept override;
 
  private:
   double threshold_ = 0;
+  bool held_ = true;  // the first revolution after activation is partial
 };
 
 // M: spindle power monitor (beyond Table 1). The paper's F_ref = P_max / V
@@ -312,5 +324,138 @@ class ChatterSuppressor final : public Module {
 
 // One of the paper's modules A–L (the registry's factory; registry.hpp).
 std::unique_ptr<Module> make_module(ModuleId id);
+
+// N: tool-breakage detector (beyond Table 1; edge/README.md has the method
+// and the study). Splits each revolution of the core's revolution clock into
+// one window per tooth and follows the resultant force |F| in each, sample
+// by sample from a third of the window on, against the same samples one
+// revolution earlier (after Tlusty and Tarng's differences across teeth and
+// revolutions). A window falling beyond the windows' common change by more
+// than `breakage_threshold` x the mean window force, and by twice the other
+// windows' spread (chatter moves every window), is a tooth that lost its
+// chip. The common change is the smaller of the median of the windows' last
+// changes and the last closed window's (entry, exit, depth and feed changes
+// move every window; runout repeats and cancels); a window's own fall the
+// revolution before is taken off (a trend). No decision in the first three
+// compared revolutions, nor below 0.75 x the contact threshold. After the
+// feed fell by more than 5 % over a revolution, or once the drive's
+// engagement is below the most it reported (the cutter leaving the part), a
+// fall is only a suspect: confirmed when another window has
+// taken the chip (risen by half the threshold's share of the mean window,
+// beyond the common change and by half that in itself) within a revolution
+// before or after it. f is latched until N is reset.
+class ToolBreakageDetector final : public Module {
+ public:
+  ToolBreakageDetector() noexcept : Module(ModuleId::N) {}
+  Period period() const noexcept override { return Period::kRevolution; }
+  SignalMask writes() const noexcept override { return mask(Signal::kToolBreakage); }
+  bool takes_samples() const noexcept override { return true; }
+  void configure(const EdgeParameters& p) override;
+  void reset() noexcept override;
+  void clear_outputs(Signals& s) noexcept override {
+    s.tool_broken = false;
+    s.breakage_window = -1;
+    s.breakage_drop = 0;
+  }
+  Status on_sample(Signals& s) noexcept override;
+  Status update(Signals&) noexcept override { return Status::kOk; }
+
+  // For the breakage study: the largest score (the drop beyond the common
+  // change, share of the mean window force) since the last call, whether it
+  // fired or not; each window's change over the last revolution and mean.
+  double take_largest_score() noexcept {
+    const double v = largest_score_;
+    largest_score_ = 0;
+    return v;
+  }
+  const double* window_changes() const noexcept { return change_; }
+  // The mean window force below which N does not judge.
+  static double force_floor_n(const EdgeParameters& p) noexcept {
+    return kFloorShare * p.contact_threshold_n;
+  }
+  const double* window_means() const noexcept { return previous_; }
+
+ private:
+  static constexpr int kMaxTeeth = 64;
+  void restart() noexcept;
+  void close_window() noexcept;
+  void judge(Signals& s, double change) noexcept;
+  EdgeParameters p_;
+  int stride_ = 0;                  // samples kept per window (the longest window)
+  std::vector<double> cumulative_;  // per window: running sums of |F|, one revolution ago
+  std::vector<double> current_;     // this window's running sums
+  int previous_count_[kMaxTeeth] = {};
+  double previous_[kMaxTeeth] = {};             // window means, one revolution ago
+  double change_[kMaxTeeth] = {};               // each window's last change of mean
+  double excess_[kMaxTeeth] = {};               // and its fall beyond the common change then
+  double excess_before_[kMaxTeeth] = {};        // the same, the revolution before
+  double change_before_[kMaxTeeth] = {};        // each window's change the revolution before
+  static constexpr double kSpreadFactor = 2.0;  // a break's fall x the others' spread
+  static constexpr int kSettleRevolutions = 3;  // compared revolutions before a decision
+  static constexpr double kFloorShare = 0.75;   // judged above this x the contact threshold
+  static constexpr double kFeedFall = 0.05;     // a suspect after the feed fell more than this
+  static constexpr double kConfirmShare = 0.5;  // x threshold x mean window: the chip taken
+  static constexpr int kJudgeFrom = 3;          // judged from 1/kJudgeFrom of a window on
+  double feed_before_[kMaxTeeth] = {};          // feed command when each window last closed
+  double feed_before2_[kMaxTeeth] = {};         // and the revolution before
+  double feed_now_ = 0;
+  double most_engaged_ = 0;  // the most engagement the drive reported since the (re)start
+  int suspect_window_ = -1;  // a fall after a falling feed, awaiting another window's rise
+  int suspect_closed_ = 0;   // closed_ when it was seen
+  double suspect_excess_ = 0;
+  double suspect_drop_ = 0;
+  void clear_suspect() noexcept {
+    suspect_window_ = -1;
+    suspect_excess_ = 0;
+    suspect_drop_ = 0;
+  }
+  int closed_ = 0;  // windows compared since the (re)start
+  bool have_previous_[kMaxTeeth] = {};
+  int window_ = -1;       // the window being summed
+  bool partial_ = false;  // sampling started inside it: not compared
+  int count_ = 0;         // its samples so far
+  double last_t_s_ = -1;  // time of the last sample taken (a gap restarts the windows)
+  double largest_score_ = 0;
+};
+
+// O: spindle-speed chatter suppressor (beyond Table 1; edge/README.md). When
+// activated (SMC II+, in place of the added pass for the first chatter of a
+// pass) it reads the chatter frequency f_c that E measured and commands the
+// spindle speed whose tooth-passing frequency is (1 - margin) x f_c / k for
+// the smallest whole k that keeps the speed within the machine's range and
+// [1 / ratio, ratio] x the programmed speed (Tlusty and Smith's rule; the
+// margin aims at the middle of the stable pocket). The feed is held until
+// the spindle is at speed (g); the core passes the command to the drive and
+// the program's remaining passes follow it. No usable speed: g at once
+// without a change (the next chatter of the pass adds a pass).
+class SpindleSpeedChatterSuppressor final : public Module {
+ public:
+  SpindleSpeedChatterSuppressor() noexcept : Module(ModuleId::O) {}
+  Period period() const noexcept override { return Period::kFast; }
+  SignalMask writes() const noexcept override { return mask(Signal::kSpeedChange); }
+  bool resets_on_activation() const noexcept override { return true; }
+  void configure(const EdgeParameters& p) override { p_ = p; }
+  void attach(RunningProgram& program) noexcept override { program_ = &program; }
+  void reset() noexcept override {
+    started_ = false;
+    elapsed_s_ = 0;
+  }
+  void clear_outputs(Signals& s) noexcept override {
+    s.spindle_speed_cmd_rpm = 0;
+    s.speed_change_done = false;
+  }
+  Status update(Signals& s) noexcept override;
+
+  // The speed the rule picks for a chatter frequency at a programmed speed;
+  // 0 when none is usable. Real-time safe.
+  static double pick_speed(const EdgeParameters& p, double chatter_hz, double programmed_rpm,
+                           double current_rpm) noexcept;
+
+ private:
+  EdgeParameters p_;
+  RunningProgram* program_ = nullptr;
+  bool started_ = false;
+  double elapsed_s_ = 0;
+};
 
 }  // namespace smc::edge

@@ -30,6 +30,9 @@ struct RunOptions {
   // Called before every tick: a drive paced by a real machine waits there for
   // its next sample (the LinuxCNC drive). Returning false ends the run.
   std::function<bool()> before_tick;
+  // A broken tool (module N) is the end of the run: it goes on this long
+  // after the event (the feed held), then stops.
+  double after_breakage_s = 1.0;
   bool keep_samples = true;   // keep the per-sample trace
   int sample_decimation = 1;  // keep every n-th sample
 };
@@ -61,6 +64,7 @@ struct RunResult {
   std::vector<EdgeEvent> events;
   double end_time_s = 0;
   bool completed = false;
+  double tool_broken_s = -1;  // module N's event, -1: none
   uint64_t ticks = 0;
 };
 

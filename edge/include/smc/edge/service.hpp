@@ -31,6 +31,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace smc::edge {
 
@@ -49,6 +50,15 @@ struct ServiceOptions {
   // A tick this late is an overrun, which holds the feed (real-time loop).
   std::chrono::microseconds overrun_threshold{2000};
   std::string mill_model_file;  // the mill's own model; default: the config's
+  // The simulated mill's tool breaks, applied to every job it cuts (machine
+  // time from the job's start): what a test needs to see module N stop a
+  // job in a whole cell.
+  struct ToothBreak {
+    unsigned tooth = 0;       // from 1
+    double at_s = 0;          // machine time from the job's start
+    double edge_loss_mm = 0;  // 0: the whole edge
+  };
+  std::vector<ToothBreak> tooth_breaks;
   // Journal of the (job, attempt)s this edge has started, kept across
   // restarts: an assignment started by an earlier run of the process is not
   // run again but reported interrupted, so the cell re-queues it. Empty:

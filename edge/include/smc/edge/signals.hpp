@@ -28,6 +28,8 @@ enum class Signal : uint32_t {
   kControllerFeed = 1u << 8,    // K or L: controller_feed_per_tooth_mm, controller_valid
   kFeedCommand = 1u << 9,       // A: feedrate_cmd_mm_s, feed_per_tooth_cmd_mm, feed_limited
   kPowerLimit = 1u << 10,       // M: power_mean_w, power_estimated, force_reference_scale
+  kToolBreakage = 1u << 11,     // N: tool_broken, breakage_window, breakage_drop
+  kSpeedChange = 1u << 12,      // O: spindle_speed_cmd_rpm, speed_change_done
 };
 using SignalMask = uint32_t;
 constexpr SignalMask operator|(Signal a, Signal b) noexcept {
@@ -58,6 +60,15 @@ struct Signals {
   // modules read them; between revolution ticks they keep the last values.
   int revolution_samples = 0;
   double revolution_period_s = 0;
+  // Where this sample lies in the core's revolution, in [0, 1): the phase at
+  // its start (a per-tooth module splits the revolution into tooth windows).
+  double revolution_phase = 0;
+  // The spindle speed was changed (module O) in the pass in progress:
+  // receptivity h (at most one speed change per pass).
+  bool speed_changed_in_pass = false;
+  // Share of the cutter's engagement arc in the part (the drive's, from the
+  // path and the part's edges); NaN when the drive cannot tell.
+  double engagement = __builtin_nan("");
 
   // --- B operator input monitor
   bool feed_hold_requested = false;     // receptivity a
@@ -89,6 +100,13 @@ struct Signals {
   double power_mean_w = 0;           // mean spindle power over the last revolution
   bool power_estimated = false;      // from the forces (the drive gives no power)
   double force_reference_scale = 1;  // F_ref = base x this, in (0, 1]
+  // --- N tool-breakage detector
+  bool tool_broken = false;  // receptivity f (latched until N is reset)
+  int breakage_window = -1;  // the tooth window that lost its chip (0-based, in revolution order)
+  double breakage_drop = 0;  // its fall, as a share of the mean window force
+  // --- O spindle-speed chatter suppressor
+  double spindle_speed_cmd_rpm = 0;  // the speed O commands (0: none); the core passes it on
+  bool speed_change_done = false;    // receptivity g: at the new speed
   // --- A feedrate routine
   double feedrate_cmd_mm_s = 0;  // what the drive is told
   double feed_per_tooth_cmd_mm = 0;

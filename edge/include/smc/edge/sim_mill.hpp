@@ -40,6 +40,11 @@ class SimulatedMill final : public Drive {
   Status step(double feedrate_cmd_mm_s, DriveSample& out) noexcept override;
   Status rewrite(const FixedProgram& program, int from) noexcept override;
   double sample_period_s() const noexcept override { return period_s_; }
+  // The spindle moves to a new speed at simulation.spindle_accel_rpm_s.
+  bool can_change_spindle_speed() const noexcept override { return true; }
+  Status change_spindle_speed(double rpm) noexcept override;
+  bool can_retract() const noexcept override { return true; }
+  Status retract() noexcept override;
 
   // Depth of material still above the final surface at x (mm), for tests.
   double remaining_depth_at(double x_mm) const noexcept;

@@ -1,5 +1,5 @@
 #pragma once
-// The state supervisor (receptivities a–e from module outputs and operator
+// The state supervisor (receptivities a–h from module outputs and operator
 // inputs) and the operation supervisor (the configured Grafcet, whose level
 // actions enable modules and whose impulse actions reset them).
 
@@ -36,7 +36,7 @@ class OperationSupervisor {
   // "X*" reset them.
   explicit OperationSupervisor(const supervision::BoundGrafcet& grafcet);
   // Not real-time. Binds `grafcet_text` first: any action that is not a
-  // module in `allowed`, an input other than a–e, a parse error or a failed
+  // module in `allowed`, an input other than a–h, a parse error or a failed
   // verification throws ConfigError naming the file position or the check.
   OperationSupervisor(std::string_view grafcet_text, std::string_view source_name,
                       ModuleMask allowed);

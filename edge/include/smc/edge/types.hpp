@@ -10,7 +10,7 @@
 namespace smc::edge {
 
 // The supervisory modules' vocabulary (A–L, masks) and the receptivities
-// a–e are shared with the cell: services/supervision.
+// a–h are shared with the cell: services/supervision.
 using supervision::bit;
 using supervision::has;
 using supervision::kInputA;
@@ -18,6 +18,9 @@ using supervision::kInputB;
 using supervision::kInputC;
 using supervision::kInputD;
 using supervision::kInputE;
+using supervision::kInputF;
+using supervision::kInputG;
+using supervision::kInputH;
 using supervision::kMaxModules;
 using supervision::kModuleCount;
 using supervision::letter;

@@ -1,0 +1,248 @@
+// Modules beyond Table 1: N (tool-breakage detector) and O (spindle-speed
+// chatter suppressor). edge/README.md, "Modules beyond Table 1".
+
+#include <algorithm>
+#include <cmath>
+
+#include "smc/edge/modules.hpp"
+
+namespace smc::edge {
+
+// ---------------------------------------------------------------- module N
+
+namespace {
+
+// The median of v[0..n), n <= 64. Real-time safe.
+double median_of(const double* v, int n) noexcept {
+  double sorted[64] = {};
+  for (int k = 0; k < n; ++k) {
+    int i = k;
+    for (; i > 0 && sorted[i - 1] > v[k]; --i) sorted[i] = sorted[i - 1];
+    sorted[i] = v[k];
+  }
+  return n % 2 == 1 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+}
+
+}  // namespace
+
+void ToolBreakageDetector::configure(const EdgeParameters& p) {
+  if (p.teeth > kMaxTeeth || p.teeth < 1) {
+    throw ConfigError(common::Diagnostic{"supervisor_config.operation.teeth",
+                                         "module N handles 1 to 64 teeth",
+                                         "leave N out for this cutter"});
+  }
+  p_ = p;
+  // A window is a tooth period: at most the longest revolution's share.
+  stride_ = std::max(p.max_samples_per_revolution, p.samples_per_revolution) / p.teeth + 2;
+  cumulative_.assign(static_cast<size_t>(stride_ * p.teeth), 0.0);
+  current_.assign(static_cast<size_t>(stride_), 0.0);
+  reset();
+}
+
+void ToolBreakageDetector::restart() noexcept {
+  std::fill(std::begin(have_previous_), std::end(have_previous_), false);
+  std::fill(std::begin(change_), std::end(change_), 0.0);
+  std::fill(std::begin(excess_), std::end(excess_), 0.0);
+  std::fill(std::begin(excess_before_), std::end(excess_before_), 0.0);
+  std::fill(std::begin(change_before_), std::end(change_before_), 0.0);
+  window_ = -1;
+  count_ = 0;
+  closed_ = 0;
+  most_engaged_ = 0;
+  clear_suspect();
+}
+
+void ToolBreakageDetector::reset() noexcept {
+  restart();
+  last_t_s_ = -1;
+  largest_score_ = 0;
+}
+
+void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
+  const int n = p_.teeth;
+  // Settled: the windows have been compared for kSettleRevolutions.
+  if (closed_ < kSettleRevolutions * n) return;
+  double total = 0;
+  for (int k = 0; k < n; ++k) total += previous_[k];
+  const double window_mean = total / n;
+  if (window_mean < kFloorShare * p_.contact_threshold_n) return;  // too little force to judge
+  // The common change: the median of the windows' last changes.
+  const double median = median_of(change_, n);
+  // A suspect (see below) is confirmed when another window has taken its
+  // chip: risen beyond the common change by half the threshold's share of
+  // the mean window (the lost chip shows concentrated in one window, the
+  // taken one spread over a window or two: their sizes are not compared).
+  const double taken = kConfirmShare * p_.breakage_threshold * window_mean;
+  if (suspect_window_ >= 0 && window_ != suspect_window_ && change >= 0.5 * taken &&
+      change - median >= taken && !s.tool_broken) {
+    s.tool_broken = true;
+    s.breakage_window = suspect_window_;
+    s.breakage_drop = suspect_drop_;
+    return;
+  }
+  // The other windows' spread about the common change: chatter moves every
+  // window a lot, a break one window.
+  double spread = 0;
+  for (int k = 0; k < n; ++k) {
+    if (k != window_) spread = std::max(spread, std::fabs(change_[k] - median));
+  }
+  // A window already falling the revolution before (the cutter leaving the
+  // part uncovers one side first) is a trend, not a break: its fall then is
+  // taken off (the second difference across revolutions).
+  // In a fast common fall (the cutter leaving the part) the median of the
+  // revolution's changes lags: the window just closed is the freshest
+  // measure of it, and the smaller of the two is taken.
+  const int before = (window_ + n - 1) % n;
+  const double common = have_previous_[before] ? std::min(median, change_[before]) : median;
+  const double excess = common - change;
+  const double trend = std::max(0.0, excess_[window_]);
+  const double drop = (excess - trend) / window_mean;
+  if (excess - trend < kSpreadFactor * spread) return;
+  if (s.tool_broken) return;
+  // A feed that fell through the revolution before this window (the
+  // controller's entry transient) takes the chip from the teeth that cut
+  // least first when the cutter runs out: one window falls as if its tooth
+  // broke, but no window takes its chip. Then a fall is a suspect until
+  // another window has risen by half of it. So is a fall while the cutter
+  // leaves the part (the engagement the drive reports fell since this window
+  // a revolution ago): at a high feed per revolution the part's end takes a
+  // third of one window's arc in one revolution. (A break makes the controller
+  // lower the feed too, but only after it: the revolution before was steady.
+  // Holds do not reach N: it is active only in the cutting step.)
+  // Leaving: below the most the drive has reported since the (re)start (at a
+  // low feed the exit takes hundreds of revolutions). NaN: no.
+  const bool leaving = s.engagement < most_engaged_ - 1e-9;
+  if (feed_before_[window_] < (1.0 - kFeedFall) * feed_before2_[window_] || leaving) {
+    if (drop > p_.breakage_threshold && (suspect_window_ < 0 || suspect_window_ == window_)) {
+      if (suspect_window_ < 0) suspect_closed_ = closed_;
+      suspect_window_ = window_;
+      suspect_excess_ = std::max(suspect_excess_, excess - trend);
+      suspect_drop_ = std::max(suspect_drop_, drop);
+      // The tooth that took the chip may come first in the revolution (its
+      // window closed already, this revolution or the one before): then
+      // the suspect is confirmed at once.
+      for (int k = 0; k < n; ++k) {
+        if (k == window_) continue;
+        // Risen: beyond the common change, and by half as much in itself (in
+        // a fast common fall a window that falls less is no tooth taking a
+        // chip).
+        const double rose = std::max(change_[k] >= 0.5 * taken ? -excess_[k] : 0.0,
+                                     change_before_[k] >= 0.5 * taken ? -excess_before_[k] : 0.0);
+        if (rose >= taken) {
+          s.tool_broken = true;
+          s.breakage_window = suspect_window_;
+          s.breakage_drop = suspect_drop_;
+          return;
+        }
+      }
+    }
+    return;
+  }
+  largest_score_ = std::max(largest_score_, drop);
+  if (drop <= p_.breakage_threshold) return;
+  s.tool_broken = true;
+  s.breakage_window = window_;
+  s.breakage_drop = drop;
+}
+
+void ToolBreakageDetector::close_window() noexcept {
+  const int j = window_;
+  const double mean = current_[static_cast<size_t>(count_ - 1)] / count_;
+  change_before_[j] = change_[j];
+  excess_before_[j] = excess_[j];
+  change_[j] = have_previous_[j] ? mean - previous_[j] : 0.0;
+  // Its fall beyond the common change, for the next revolution's trend.
+  excess_[j] = have_previous_[j] ? median_of(change_, p_.teeth) - change_[j] : 0.0;
+  if (have_previous_[j]) ++closed_;
+  // A suspect no window confirmed within a revolution: not a break.
+  if (suspect_window_ >= 0 && closed_ - suspect_closed_ > p_.teeth) clear_suspect();
+  previous_[j] = mean;
+  feed_before2_[j] = feed_before_[j];
+  feed_before_[j] = feed_now_;
+  previous_count_[j] = count_;
+  have_previous_[j] = true;
+  std::copy_n(current_.begin(), count_, cumulative_.begin() + static_cast<long>(j) * stride_);
+}
+
+Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
+  const ForceSample& f = s.sample;
+  // A gap in the samples (N was inactive): the windows of before are stale.
+  if (last_t_s_ >= 0 && f.t_s - last_t_s_ > 1.5 * p_.sample_period_s) restart();
+  last_t_s_ = f.t_s;
+  feed_now_ = s.feed_per_tooth_cmd_mm;
+  if (s.engagement > most_engaged_) most_engaged_ = s.engagement;
+  const int n = p_.teeth;
+  const double phase = std::clamp(s.revolution_phase, 0.0, 1.0);
+  const int w = std::min(n - 1, static_cast<int>(phase * n));
+  if (w != window_) {
+    if (window_ >= 0 && count_ > 0 && !partial_) close_window();
+    partial_ = window_ < 0;
+    window_ = w;
+    count_ = 0;
+  }
+  const double force = std::sqrt(f.f_x_n * f.f_x_n + f.f_y_n * f.f_y_n + f.f_z_n * f.f_z_n);
+  if (!std::isfinite(force)) return Status::kError;
+  if (count_ >= stride_) return Status::kOk;  // a window longer than the longest revolution's
+  current_[static_cast<size_t>(count_)] =
+      (count_ > 0 ? current_[static_cast<size_t>(count_ - 1)] : 0.0) + force;
+  ++count_;
+  // From half a window on: this window's samples so far against the same
+  // samples of the window one revolution ago.
+  const int j = window_;
+  if (partial_ || !have_previous_[j] || kJudgeFrom * count_ < previous_count_[j] ||
+      count_ > previous_count_[j]) {
+    return Status::kOk;
+  }
+  const double before = cumulative_[static_cast<size_t>(j * stride_ + count_ - 1)];
+  judge(s, (current_[static_cast<size_t>(count_ - 1)] - before) / count_);
+  return Status::kOk;
+}
+
+// ---------------------------------------------------------------- module O
+
+double SpindleSpeedChatterSuppressor::pick_speed(const EdgeParameters& p, double chatter_hz,
+                                                 double programmed_rpm,
+                                                 double current_rpm) noexcept {
+  if (!(chatter_hz > 0) || !(programmed_rpm > 0) || p.teeth <= 0) return 0;
+  const double lo = std::max(p.min_spindle_rpm, programmed_rpm / p.speed_change_max_ratio);
+  const double hi = std::min(p.max_spindle_rpm, programmed_rpm * p.speed_change_max_ratio);
+  const double aim_hz = (1.0 - p.speed_change_frequency_margin) * chatter_hz;
+  // k = 1 is the fastest speed; the first k inside the range is the highest
+  // usable pocket (the pockets widen with speed).
+  for (int k = 1; k <= 1000; ++k) {
+    const double rpm = 60.0 * aim_hz / (p.teeth * k);
+    if (rpm < lo) break;
+    if (rpm > hi) continue;
+    // A speed within 2 % of the one that chatters is no change.
+    if (std::fabs(rpm - current_rpm) <= 0.02 * current_rpm) continue;
+    return rpm;
+  }
+  return 0;
+}
+
+Status SpindleSpeedChatterSuppressor::update(Signals& s) noexcept {
+  if (!started_) {
+    started_ = true;
+    elapsed_s_ = 0;
+    const double programmed =
+        program_ != nullptr && program_->current_pass >= 0 &&
+                program_->current_pass < program_->program.count
+            ? program_->program.passes[static_cast<size_t>(program_->current_pass)].spindle_rpm
+            : s.spindle_rpm;
+    const double rpm = pick_speed(p_, s.chatter_frequency_hz, programmed, s.spindle_rpm);
+    s.spindle_speed_cmd_rpm = rpm;
+    s.speed_change_done = rpm == 0;  // nothing to do: the next chatter adds a pass
+    return Status::kOk;
+  }
+  if (s.speed_change_done) return Status::kOk;
+  elapsed_s_ += p_.fast_period_s;
+  const double cmd = s.spindle_speed_cmd_rpm;
+  if (std::fabs(s.spindle_rpm - cmd) <= p_.spindle_at_speed_tolerance * cmd) {
+    s.speed_change_done = true;
+    return Status::kOk;
+  }
+  // The spindle did not get there: a module error holds the feed.
+  return elapsed_s_ > p_.speed_change_timeout_s ? Status::kError : Status::kOk;
+}
+
+}  // namespace smc::edge
