@@ -33,18 +33,11 @@
 #include "smc/machining/model_proto.hpp"
 #include "smc/machining/tds.hpp"
 #include "smc_config.pb.h"
+#include "study_grid.hpp"
 
 using namespace smc::edge;
 
 namespace {
-
-std::vector<double> list(const char* text) {
-  std::vector<double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) out.push_back(std::atof(item.c_str()));
-  return out;
-}
 
 struct Cell {
   double rpm = 0, width = 0, runout = 0;
@@ -56,36 +49,19 @@ struct Cell {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int seeds = 2;
-  bool verbose = false;
+  smc::bench::StudyGrid grid;
+  grid.seeds = 2;
+  grid.fractions = {0.3, 0.6, 0.9, 1.3, 1.8};
+  grid.runouts = {0};
   double threshold_override = 0;
   int confirm_override = 0;
-  std::vector<double> speeds{750, 1100, 1500, 2000, 2500, 3000};
-  std::vector<double> widths{25, 37, 50};
-  std::vector<double> fractions{0.3, 0.6, 0.9, 1.3, 1.8};
-  std::vector<double> runouts{0};
   for (int i = 1; i < argc; ++i) {
+    if (grid.take(argc, argv, i)) continue;
     const bool more = i + 1 < argc;
-    if (std::strcmp(argv[i], "--seeds") == 0 && more) {
-      seeds = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--speeds") == 0 && more) {
-      speeds = list(argv[++i]);
-    } else if (std::strcmp(argv[i], "--widths") == 0 && more) {
-      widths = list(argv[++i]);
-    } else if (std::strcmp(argv[i], "--fractions") == 0 && more) {
-      fractions = list(argv[++i]);
-    } else if (std::strcmp(argv[i], "--runouts") == 0 && more) {
-      runouts = list(argv[++i]);
-    } else if (std::strcmp(argv[i], "--threshold") == 0 && more) {
+    if (std::strcmp(argv[i], "--threshold") == 0 && more) {
       threshold_override = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
       confirm_override = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--verbose") == 0) {
-      verbose = true;
-    } else if (std::strcmp(argv[i], "--quick") == 0) {
-      speeds = {1100, 2500};
-      widths = {37};
-      seeds = 1;
     } else {
       std::fprintf(stderr,
                    "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
@@ -94,6 +70,13 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  if (grid.quick) grid.seeds = 1;
+  const auto& speeds = grid.speeds;
+  const auto& widths = grid.widths;
+  const auto& fractions = grid.fractions;
+  const auto& runouts = grid.runouts;
+  const int seeds = grid.seeds;
+  const bool verbose = grid.verbose;
   auto base = smc::documents::load_supervisor_config(std::string(SMC_SOURCE_DIR) +
                                                      "/edge/configs/smc2.textproto");
   if (confirm_override > 0) {
