@@ -92,10 +92,12 @@ fi
 pids+=($!)
 echo "== MTConnect adapter: 127.0.0.1:7878 (SHDR; devices: mtconnect/Devices.xml)"
 
-echo "== submitting a transfer-line job and a job-shop job"
+echo "== submitting a transfer-line job (SMC I), a job-shop job (SMC II) and an extended"
+echo "   job-shop job (SMC II+: chatter moved to a stable spindle speed)"
 tl=$("$bin/smc-cell" job submit "$root/cell/jobs/transfer_line.textproto" --db "$run/cell.db" | awk '{print $1}')
 js=$("$bin/smc-cell" job submit "$root/cell/jobs/job_shop.json" --db "$run/cell.db" | awk '{print $1}')
-"$bin/smc-cell" watch "$tl" "$js" --db "$run/cell.db" --interval 3 --timeout 600
+jp=$("$bin/smc-cell" job submit "$root/cell/jobs/job_shop_plus.textproto" --db "$run/cell.db" | awk '{print $1}')
+"$bin/smc-cell" watch "$tl" "$js" "$jp" --db "$run/cell.db" --interval 3 --timeout 600
 
 echo
 grep -hE "chatter|candidate force model" "$run/cell.log" | sed 's/^/  /' || true

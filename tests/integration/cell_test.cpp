@@ -80,12 +80,27 @@ class Cell : public ::testing::Test {
   }
   void start_edge(const std::string& machine,
                   const std::string& mill_model = "cell/models/paper_face_mill.textproto",
-                  const std::string& speedup = "8") {
+                  const std::string& speedup = "8", const std::vector<std::string>& extra = {}) {
     edges_[machine].reset();
-    edges_[machine].emplace(std::vector<std::string>{
-        bin("smc-edge"), "--log-level", "warn", "run", "--machine", machine, "--partition",
-        partition_, "--speedup", speedup, "--lease-ms", "1000", "--no-realtime", "--mill-model",
-        src(mill_model), "--state-file", (dir_ / (machine + ".journal")).string()});
+    std::vector<std::string> args{bin("smc-edge"),
+                                  "--log-level",
+                                  "warn",
+                                  "run",
+                                  "--machine",
+                                  machine,
+                                  "--partition",
+                                  partition_,
+                                  "--speedup",
+                                  speedup,
+                                  "--lease-ms",
+                                  "1000",
+                                  "--no-realtime",
+                                  "--mill-model",
+                                  src(mill_model),
+                                  "--state-file",
+                                  (dir_ / (machine + ".journal")).string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    edges_[machine].emplace(args);
   }
   std::string submit(const std::string& file) {
     auto before = jobs();
@@ -186,6 +201,48 @@ TEST_F(Cell, DemoJobsCompleteWithTheExpectedSmcChoice) {
   EXPECT_NE(gcode.find("rewrite 1: passes 1 to 2"), std::string::npos) << gcode;
   EXPECT_NE(gcode.find("G0 Z-1"), std::string::npos) << gcode;
   EXPECT_NE(gcode.find("G0 Z-2"), std::string::npos) << gcode;
+}
+
+// SMC II+ in a whole cell: the cover (no models, speed change allowed) is
+// planned SMC II+ for a simulated mill; its chatter moves the spindle to a
+// stable pocket; tooth 2 breaks 12.5 s into the job, module N stops the feed,
+// the edge fails the job with the reason and the cell retires the tool, so
+// the next job for it is refused at planning.
+TEST_F(Cell, ABrokenToothFailsTheJobAndRetiresTheTool) {
+  start_cell();
+  start_edge("mill-1", "cell/models/paper_face_mill.textproto", "8", {"--break-tooth", "2@12.5"});
+  const auto file = dir_ / "cover.textproto";
+  {
+    std::ofstream f(file);
+    f << "part_id: \"cover-jsp\"\nmachine_id: \"mill-1\"\n";
+  }
+  const std::string id = submit(file.string());
+  ASSERT_FALSE(id.empty());
+  ASSERT_TRUE(wait_jobs(
+      {id}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s))
+      << "the job did not end";
+  const auto j = *job(id);
+  EXPECT_EQ(j.variant, cfg::SMC_II_PLUS) << j.explanation;
+  EXPECT_NE(j.explanation.find("SMC II+ on mill-1"), std::string::npos) << j.explanation;
+  ASSERT_EQ(j.state, cfg::JOB_FAILED);
+  std::string reasons;
+  for (const auto& e : events(id)) reasons += e.reason + "\n";
+  EXPECT_NE(reasons.find("spindle speed changed to 2700 rpm"), std::string::npos) << reasons;
+  EXPECT_NE(reasons.find("tool breakage at 12.5"), std::string::npos) << reasons;
+  EXPECT_NE(reasons.find("tool retracted"), std::string::npos) << reasons;
+  auto db = store::Store::open(db_, store::OpenMode::kExisting);
+  const auto tool = db.tool("fm-r25-4t");
+  ASSERT_TRUE(tool.has_value());
+  EXPECT_NE(tool->retired_at_ms, 0) << "the broken tool is still in use";
+  bool recorded = false;
+  for (const auto& h : db.history("tool", "fm-r25-4t")) {
+    recorded = recorded || (h.action == "retired" && h.reason.find("broken in job " + id) == 0);
+  }
+  EXPECT_TRUE(recorded);
+  // A new job for the part (its default tool) is not planned.
+  EXPECT_NE(
+      run_cmd({bin("smc-cell"), "--log-level", "off", "job", "submit", file.string(), "--db", db_}),
+      0);
 }
 
 // mill-1 differs from the models the cell holds for it

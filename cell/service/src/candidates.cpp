@@ -28,6 +28,15 @@ PlanInputs bind_job(store::Store& db, const store::Job& job, Selection& selectio
   const auto tool = db.tool(job.spec.tool_id());
   if (!tool)
     throw std::runtime_error("job " + job.id + ": unknown tool '" + job.spec.tool_id() + "'");
+  if (tool->retired_at_ms != 0) {
+    // Retired after the job was accepted: broken (module N) or withdrawn.
+    throw std::runtime_error("job " + job.id + ": tool '" + tool->id +
+                             "' was retired after the job was submitted (`smc-cell catalog show "
+                             "tool " +
+                             tool->id +
+                             "` says why); submit it again with another "
+                             "tool");
+  }
   if (!job.spec.machine_id().empty()) {
     const auto m = db.machine(job.spec.machine_id());
     if (m && m->retired_at_ms != 0) {

@@ -134,8 +134,31 @@ const char* const kSmc1Why =
 const char* const kSmc2Why =
     ", so the job runs as programmed with chatter detection and suppression and the adaptive "
     "force controller.";
+const char* const kSmc2PlusWhy =
+    ", so the job runs as programmed with the adaptive force controller; a first chatter in a "
+    "pass moves the spindle to a stable pocket (module O) rather than adding a pass, because "
+    "the part allows a speed change and this machine can override its spindle speed; a broken "
+    "tooth stops the feed (module N).";
+
+// Whether SMC II+ may run this job on this machine, and if not, why.
+std::string smc2_plus_refusal(const PlanInputs& in) {
+  if (!in.part.speed_change_allowed) {
+    return "part " + in.part.id + " does not allow a spindle speed change";
+  }
+  if (in.machine.id.empty()) return "no machine was given";
+  if (!machine_can_change_spindle_speed(in.machine)) {
+    return in.machine.id + "'s " + in.machine.drive + " drive cannot override its spindle speed";
+  }
+  return {};
+}
 
 }  // namespace
+
+bool machine_can_change_spindle_speed(const store::Machine& m) {
+  // The simulated mill implements the speed override; the LinuxCNC drive
+  // does not yet (edge/README.md, module O).
+  return m.drive.empty() || m.drive == "simulated";
+}
 
 Selection select_variant(const PlanInputs& in) {
   Selection sel;
@@ -149,12 +172,17 @@ Selection select_variant(const PlanInputs& in) {
     sel.force = u.force;
     sel.milling = u.milling;
     why << "SMC I on " << in.machine.id << kSmc1Why;
+  } else if (const std::string no_plus = smc2_plus_refusal(in); no_plus.empty()) {
+    sel.variant = smc::config::SMC_II_PLUS;
+    why << "SMC II+ on " << in.machine.id
+        << " (job shop, extended): " << why_not(in.models, u, cut_of(in)) << kSmc2PlusWhy;
   } else {
     sel.variant = smc::config::SMC_II;
     why << "SMC II on " << on << " (job shop): "
         << (in.machine.id.empty() ? std::string("no machine was given")
                                   : why_not(in.models, u, cut_of(in)))
         << kSmc2Why;
+    if (in.part.speed_change_allowed) why << " Not SMC II+: " << no_plus << ".";
   }
   sel.explanation = why.str();
   return sel;
@@ -185,6 +213,14 @@ Selection bind_and_select(PlanInputs& in, const std::vector<MachineModels>& mach
     if ((m->available || !any_available) && usable_on(m->models, m->machine.id, cut_of(in)).smc1())
       return bind(*m);
   }
+  // Else SMC II+ on an available machine that can override its spindle
+  // speed, when the part allows a speed change.
+  if (in.part.speed_change_allowed) {
+    for (const MachineModels* m : order) {
+      if ((m->available || !any_available) && machine_can_change_spindle_speed(m->machine))
+        return bind(*m);
+    }
+  }
   // Else SMC II on whichever machine is free, each machine's reason given.
   in.machine = {};
   in.models.clear();
@@ -212,6 +248,7 @@ Planner::Planner(const std::string& grafcet_dir, smc::config::SupervisorConfig d
     : smc1_text_(smc::documents::read_file(grafcet_dir + "/smc1.grafcet")),
       smc1_guarded_text_(smc::documents::read_file(grafcet_dir + "/smc1_guarded.grafcet")),
       smc2_text_(smc::documents::read_file(grafcet_dir + "/smc2.grafcet")),
+      smc2_plus_text_(smc::documents::read_file(grafcet_dir + "/smc2_plus.grafcet")),
       defaults_(std::move(defaults)),
       options_(options) {}
 
@@ -372,6 +409,17 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
              "are wrong; it is suppressed and the models are marked suspect.";
     }
     c.set_explanation(why.str());
+  } else if (sel.variant == smc::config::SMC_II_PLUS) {
+    if (in.machine.id.empty()) {
+      throw std::runtime_error("job " + in.job.id +
+                               ": an SMC II+ plan needs the machine whose spindle it moves");
+    }
+    out.machine_id = in.machine.id;
+    c.set_grafcet_name("smc2_plus.grafcet");
+    c.set_grafcet_text(smc2_plus_text_);
+    for (const char* m : {"A", "B", "C", "D", "E", "F", "G", "H", "I", "J", "K", "M", "N", "O"}) {
+      c.add_modules(m);
+    }
   } else {
     c.set_grafcet_name("smc2.grafcet");
     c.set_grafcet_text(smc2_text_);

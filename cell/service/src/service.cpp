@@ -195,6 +195,12 @@ struct CellService::Impl {
           choice->set_explanation("no default tool: a job must name one");
           continue;
         }
+        if (const auto t = db.tool(part.tool_id); t && t->retired_at_ms != 0) {
+          choice->set_variant(cfg::SMC_UNSPECIFIED);
+          choice->set_explanation("default tool " + part.tool_id +
+                                  " is retired: a job must name another");
+          continue;
+        }
         Selection sel;
         const PlanInputs in = bind_job(db, job, sel, [&](const std::string& id) {
           const auto it = mills.find(id);
@@ -202,7 +208,9 @@ struct CellService::Impl {
                                                             started, now, opt.edge_grace);
         });
         choice->set_variant(sel.variant);
-        choice->set_machine_id(sel.variant == cfg::SMC_I ? in.machine.id : std::string());
+        choice->set_machine_id(sel.variant == cfg::SMC_I || sel.variant == cfg::SMC_II_PLUS
+                                   ? in.machine.id
+                                   : std::string());
         choice->set_explanation(sel.explanation);
         if (sel.force) choice->add_model_ids(sel.force->id);
         if (sel.milling) choice->add_model_ids(sel.milling->id);
@@ -535,6 +543,7 @@ struct CellService::Impl {
             if (j->state == cfg::JOB_ASSIGNED) move(*j, cfg::JOB_RUNNING, "edge reported progress");
             move(*db.job(job_id), cfg::JOB_FAILED, "edge " + j->machine_id + ": " + msg);
             withdraw(j->machine_id);
+            if (msg.rfind(kToolBreakage, 0) == 0) mark_tool_broken(*db.job(job_id), msg);
           }
           break;
         case smc_data_JOB_INTERRUPTED:
@@ -545,6 +554,21 @@ struct CellService::Impl {
           break;
       }
     });
+  }
+
+  // Module N stopped a job: the tool it used is retired (recorded in the
+  // catalog's history with the reason), so that no new job is planned with
+  // it until a new tool is entered.
+  static constexpr const char* kToolBreakage = "tool breakage";
+  void mark_tool_broken(const store::Job& j, const std::string& msg) {
+    const std::string tool = j.spec.tool_id();
+    if (tool.empty()) return;
+    try {
+      db.retire("tool", tool, "cell", "broken in job " + j.id + " on " + j.machine_id + ": " + msg);
+      spdlog::error("tool {} retired: broken in job {} on {}", tool, j.id, j.machine_id);
+    } catch (const std::exception& e) {
+      spdlog::warn("tool {} not retired: {}", tool, e.what());  // retired already, or gone
+    }
   }
 
   void take_chatter() {
@@ -583,6 +607,11 @@ struct CellService::Impl {
                   static_cast<double>(e.energy_ratio));
     std::string reason =
         tag + ": " + what + "; program now " + std::to_string(e.new_pass_count) + " passes";
+    if (e.new_spindle_rpm > 0) {
+      // SMC II+: module O moved the spindle instead of adding a pass.
+      reason += ", spindle speed changed to " +
+                std::to_string(static_cast<int>(std::lround(e.new_spindle_rpm))) + " rpm";
+    }
     if (automatic && j->variant == cfg::SMC_I) {
       const auto models = db.plan_models(j->id);
       const std::string why = "the SMC I plan of job " + j->id + " made from it chattered on " +
@@ -677,7 +706,9 @@ struct CellService::Impl {
       // engagement into the force, which the model does not describe).
       if (!(s.f_ref_n > 0) || std::fabs(s.f_y_peak_n - s.f_ref_n) > 0.1f * s.f_ref_n) return;
       for (const auto& j : db.jobs({.state = cfg::JOB_RUNNING})) {
-        if (j.machine_id != get_string(s.machine_id) || j.variant != cfg::SMC_II) continue;
+        if (j.machine_id != get_string(s.machine_id) ||
+            (j.variant != cfg::SMC_II && j.variant != cfg::SMC_II_PLUS))
+          continue;
         learning[j.id].push_back({s.depth_mm, s.feed_per_tooth_mm, s.f_y_peak_n});
       }
     });

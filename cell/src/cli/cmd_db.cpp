@@ -81,11 +81,12 @@ SMC_CELL_COMMAND(db, 21) {
       "Create the database (or bring an existing one to the latest schema); with --seed add "
       "the demo's machines, tool, material and parts (idempotent)");
   add_db_option(init, init_args->db);
-  init->add_flag("--seed", init_args->seed,
-                 "Add the demo seed data: the catalog documents of cell/catalog (the paper's "
-                 "machine as mill-1 and mill-2, its face mill, 6061-T6, bracket-tl with "
-                 "validated models and housing-js without), applied as `smc-cell catalog "
-                 "apply` does");
+  init->add_flag(
+      "--seed", init_args->seed,
+      "Add the demo seed data: the catalog documents of cell/catalog (the paper's "
+      "machine as mill-1 and mill-2, its face mill, 6061-T6, bracket-tl with "
+      "validated models, housing-js and cover-jsp without), applied as `smc-cell catalog "
+      "apply` does");
   init->add_option("--catalog", init_args->catalog, "Catalog folder for --seed")
       ->capture_default_str();
   init->callback([init_args] {

@@ -64,7 +64,8 @@ const char* const kToolCols =
 const char* const kMaterialCols = "SELECT id, name, COALESCE(retired_at_ms, 0) FROM materials ";
 const char* const kPartCols =
     "SELECT id, name, material_id, COALESCE(tool_id, ''), width_mm, offset_mm, length_mm, "
-    "total_depth_mm, feedrate_mm_s, spindle_rpm, COALESCE(retired_at_ms, 0) FROM parts ";
+    "total_depth_mm, feedrate_mm_s, spindle_rpm, COALESCE(retired_at_ms, 0), "
+    "speed_change_allowed FROM parts ";
 const char* const kModelCols =
     "SELECT id, kind, machine_id, tool_id, material_id, COALESCE(part_id, ''), provenance, "
     "validated, document, fit, note, created_at_ms, suspect_reason, validity, "
@@ -80,8 +81,8 @@ Tool read_tool(const Stmt& s) {
 }
 Material read_material(const Stmt& s) { return Material{s.text(0), s.text(1), s.int64(2)}; }
 Part read_part(const Stmt& s) {
-  return Part{s.text(0), s.text(1), s.text(2), s.text(3), s.real(4),  s.real(5),
-              s.real(6), s.real(7), s.real(8), s.real(9), s.int64(10)};
+  return Part{s.text(0), s.text(1), s.text(2), s.text(3), s.real(4),   s.real(5),
+              s.real(6), s.real(7), s.real(8), s.real(9), s.int64(10), s.int64(11) != 0};
 }
 
 ProcessModel read_model(const Stmt& s, const std::string& file) {
@@ -172,14 +173,17 @@ void Store::put_part(const Part& p) {
   }
   Stmt(db_.get(), path_,
        "INSERT INTO parts (id, name, material_id, tool_id, width_mm, offset_mm, length_mm, "
-       "total_depth_mm, feedrate_mm_s, spindle_rpm) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
+       "total_depth_mm, feedrate_mm_s, spindle_rpm, speed_change_allowed) "
+       "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
        "ON CONFLICT (id) DO UPDATE SET name = excluded.name, "
        "material_id = excluded.material_id, tool_id = excluded.tool_id, "
        "width_mm = excluded.width_mm, offset_mm = excluded.offset_mm, "
        "length_mm = excluded.length_mm, total_depth_mm = excluded.total_depth_mm, "
-       "feedrate_mm_s = excluded.feedrate_mm_s, spindle_rpm = excluded.spindle_rpm")
+       "feedrate_mm_s = excluded.feedrate_mm_s, spindle_rpm = excluded.spindle_rpm, "
+       "speed_change_allowed = excluded.speed_change_allowed")
       .bind(p.id, p.name, p.material_id, or_null(p.tool_id), p.width_mm, p.offset_mm, p.length_mm,
-            p.total_depth_mm, p.feedrate_mm_s, p.spindle_rpm)
+            p.total_depth_mm, p.feedrate_mm_s, p.spindle_rpm,
+            static_cast<std::int64_t>(p.speed_change_allowed ? 1 : 0))
       .run();
 }
 

@@ -112,6 +112,7 @@ cfg::CatalogPart to_doc(const Part& p) {
   d.set_total_depth_mm(p.total_depth_mm);
   d.set_feedrate_mm_s(p.feedrate_mm_s);
   d.set_spindle_rpm(p.spindle_rpm);
+  d.set_speed_change_allowed(p.speed_change_allowed);
   return d;
 }
 cfg::CatalogPart normal(cfg::CatalogPart d) {
@@ -129,7 +130,8 @@ Part to_row(const cfg::CatalogPart& d) {
               d.total_depth_mm(),
               d.feedrate_mm_s(),
               d.spindle_rpm(),
-              0};
+              0,
+              d.speed_change_allowed()};
 }
 
 cfg::CatalogModel to_doc(const ProcessModel& m) {

@@ -79,6 +79,8 @@ std::string_view variant_name(smc::config::SmcVariant v) noexcept {
       return "SMC I";
     case smc::config::SMC_II:
       return "SMC II";
+    case smc::config::SMC_II_PLUS:
+      return "SMC II+";
     default:
       return "unspecified";
   }

@@ -186,6 +186,12 @@ CREATE INDEX stability_evidence_by_part ON stability_evidence (part_id, machine_
 CREATE TRIGGER stability_evidence_append_only_update BEFORE UPDATE ON stability_evidence
 BEGIN SELECT RAISE(ABORT, 'stability_evidence is append-only'); END;
 )sql"},
+    Migration{5, "parts that allow a spindle speed change", R"sql(
+-- SMC II+ (module O) may move the spindle off the programmed speed only on
+-- a part whose tolerances allow it.
+ALTER TABLE parts ADD COLUMN speed_change_allowed INTEGER NOT NULL DEFAULT 0
+  CHECK (speed_change_allowed IN (0, 1));
+)sql"},
 };
 
 }  // namespace

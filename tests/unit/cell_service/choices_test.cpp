@@ -18,6 +18,7 @@
 #include "smc/documents/load.hpp"
 #include "smc/machining/model_proto.hpp"
 #include "smc/machining/tds.hpp"
+#include "smc/supervision/config.hpp"
 #include "smc/supervision/parameters.hpp"
 
 namespace cell = smc::cell;
@@ -230,6 +231,52 @@ TEST(Binding, AJobThatNamesAMachineWithoutModelsIsSmcIIThere) {
   EXPECT_NE(sel.explanation.find("SMC II on mill-1"), std::string::npos) << sel.explanation;
 }
 
+// SMC II+ (beyond the paper): a job-shop part whose tolerances allow a
+// spindle speed change, on a machine that can override its spindle speed.
+TEST(Selection, APartAllowingASpeedChangeOnASimulatedMillIsSmcIIPlus) {
+  cell::PlanInputs in;
+  in.machine = mill("mill-1");
+  in.tool.id = "fm";
+  in.part.id = "cover";
+  in.part.material_id = "al";
+  in.part.speed_change_allowed = true;
+  const auto sel = cell::select_variant(in);
+  EXPECT_EQ(sel.variant, cfg::SMC_II_PLUS);
+  EXPECT_NE(sel.explanation.find("SMC II+ on mill-1"), std::string::npos) << sel.explanation;
+  EXPECT_NE(sel.explanation.find("allows a speed change"), std::string::npos) << sel.explanation;
+  EXPECT_NE(sel.explanation.find("no validated models"), std::string::npos) << sel.explanation;
+  // The LinuxCNC drive has no speed override: SMC II, saying why not II+.
+  in.machine.drive = "linuxcnc";
+  const auto cnc = cell::select_variant(in);
+  EXPECT_EQ(cnc.variant, cfg::SMC_II);
+  EXPECT_NE(cnc.explanation.find("Not SMC II+: mill-1's linuxcnc drive cannot override"),
+            std::string::npos)
+      << cnc.explanation;
+  // A part that does not allow it: SMC II, and II+ is not mentioned.
+  in.machine.drive = "simulated";
+  in.part.speed_change_allowed = false;
+  const auto plain = cell::select_variant(in);
+  EXPECT_EQ(plain.variant, cfg::SMC_II);
+  EXPECT_EQ(plain.explanation.find("SMC II+"), std::string::npos) << plain.explanation;
+}
+
+TEST(Binding, SmcIIPlusIsBoundToAMachineThatCanChangeItsSpindleSpeed) {
+  cell::MachineModels cnc{mill("mill-1"), true, {}};
+  cnc.machine.drive = "linuxcnc";
+  cell::MachineModels sim{mill("mill-2"), true, {}};
+  cell::PlanInputs in;
+  in.part.id = "cover";
+  in.part.speed_change_allowed = true;
+  const auto sel = cell::bind_and_select(in, {cnc, sim});
+  EXPECT_EQ(sel.variant, cfg::SMC_II_PLUS);
+  EXPECT_EQ(in.machine.id, "mill-2");
+  // Only the CNC: SMC II on any machine.
+  cell::PlanInputs only_cnc;
+  only_cnc.part = in.part;
+  EXPECT_EQ(cell::bind_and_select(only_cnc, {cnc}).variant, cfg::SMC_II);
+  EXPECT_TRUE(only_cnc.machine.id.empty());
+}
+
 // A model is used only inside its validity range; the explanation says why
 // not.
 TEST(Selection, AModelOutsideItsValidityRangeIsNotUsed) {
@@ -360,6 +407,31 @@ TEST(Binding, AJobForAMachineRetiredAfterSubmissionIsRefusedAtPlanning) {
   std::filesystem::remove_all(dir);
 }
 
+// A job accepted before its tool broke (the cell retires a tool module N
+// found broken) is not planned with it.
+TEST(Binding, AJobWhoseToolWasRetiredAfterSubmissionIsRefusedAtPlanning) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("smc-retired-tool-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    auto db = store::Store::open((dir / "cell.db").string());
+    store::seed_demo(db);
+    cfg::Job spec;
+    spec.set_part_id("cover-jsp");
+    const auto job = db.submit_job(spec);
+    db.retire("tool", "fm-r25-4t", "cell", "broken in job job-000001 on mill-1: tool breakage");
+    cell::Selection sel;
+    try {
+      (void)cell::bind_job(db, *db.job(job.id), sel);
+      ADD_FAILURE() << "planned with a retired tool";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("tool 'fm-r25-4t' was retired"), std::string::npos)
+          << e.what();
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST_F(CellChoices, ThePapersSmcIOnRequest) {
   cfg::SupervisorConfig defaults;
   smc::documents::load(src("cell/configs/defaults.textproto"), defaults);
@@ -426,6 +498,22 @@ TEST_F(CellChoices, JobShopPartRunsAsProgrammedUnderSmcII) {
   EXPECT_EQ(plan.config.grafcet_name(), "smc2.grafcet");
   EXPECT_FALSE(plan.config.has_force_model());
   EXPECT_LT(plan.critical_depth_mm, 0);  // no stability analysis without models
+}
+
+TEST_F(CellChoices, TheCoverRunsUnderSmcIIPlusOnItsMachine) {
+  const auto in = inputs("cover-jsp");
+  const auto sel = cell::select_variant(in);
+  ASSERT_EQ(sel.variant, cfg::SMC_II_PLUS) << sel.explanation;
+  const auto plan = planner_->plan(in, sel);
+  EXPECT_EQ(plan.machine_id, "mill-1");
+  ASSERT_EQ(plan.config.program().passes_size(), 1);
+  EXPECT_DOUBLE_EQ(plan.config.program().passes(0).depth_mm(), 2.0);
+  EXPECT_EQ(modules_of(plan.config), "ABCDEFGHIJKMNO");
+  EXPECT_EQ(plan.config.grafcet_name(), "smc2_plus.grafcet");
+  EXPECT_EQ(plan.config.variant(), cfg::SMC_II_PLUS);
+  // What the edge will get is a valid configuration.
+  EXPECT_NO_THROW((void)smc::supervision::validate(
+      cell::Planner::for_machine(plan.config, *db_->machine("mill-1"), "check")));
 }
 
 TEST_F(CellChoices, ADepthNeedingMoreThanSixteenPassesIsRefusedNamingTheJob) {

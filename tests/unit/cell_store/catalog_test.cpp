@@ -53,7 +53,7 @@ std::string read_all(const std::filesystem::path& p) {
 TEST_F(CellCatalog, TheShippedCatalogRoundTripsThroughExport) {
   Store a = Store::open((dir_ / "a.db").string());
   const auto created = apply_catalog(a, load_catalog({default_catalog_dir()}), {});
-  EXPECT_EQ(created.size(), 10u);
+  EXPECT_EQ(created.size(), 11u);
   write_catalog(export_catalog(a), (dir_ / "export-a").string());
   Store b = Store::open((dir_ / "b.db").string());
   apply_catalog(b, load_catalog({(dir_ / "export-a").string()}), {.author = "t"});

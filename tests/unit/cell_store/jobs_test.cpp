@@ -110,7 +110,7 @@ TEST_F(CellStoreJobs, UnknownPartNamesTheFieldTheKnownPartsAndAFix) {
   } catch (const JobRejected& e) {
     ASSERT_EQ(e.errors.size(), 1u);
     EXPECT_EQ(e.errors[0].where, "job.part_id");
-    EXPECT_EQ(e.errors[0].message, "unknown part 'x' (known: bracket-tl, housing-js)");
+    EXPECT_EQ(e.errors[0].message, "unknown part 'x' (known: bracket-tl, cover-jsp, housing-js)");
     EXPECT_FALSE(e.errors[0].fix.empty());
     EXPECT_THAT(e.what(), StartsWith("job.part_id: unknown part 'x'"));
     EXPECT_THAT(e.what(), HasSubstr("; fix: "));
@@ -180,7 +180,7 @@ TEST_F(CellStoreJobs, BadJobFileNamesPathFieldAndFixAndWritesNothing) {
   } catch (const JobFileError& e) {
     const std::string msg = e.what();
     EXPECT_THAT(msg, HasSubstr(path + ": job.part_id: unknown part 'bracket-xx' (known: "
-                                      "bracket-tl, housing-js); fix: "));
+                                      "bracket-tl, cover-jsp, housing-js); fix: "));
     EXPECT_THAT(msg, HasSubstr(path + ": job.depth_mm: -2 mm is negative; fix: "));
   }
   EXPECT_EQ(s.counts().jobs, 0);

@@ -27,7 +27,7 @@ TEST_F(CellStoreSeed, IsIdempotent) {
   EXPECT_EQ(first.machines, 2);
   EXPECT_EQ(first.tools, 1);
   EXPECT_EQ(first.materials, 1);
-  EXPECT_EQ(first.parts, 2);
+  EXPECT_EQ(first.parts, 3);
   EXPECT_EQ(first.models, 4);  // force + milling for bracket-tl on each mill
   EXPECT_EQ(again.machines, first.machines);
   EXPECT_EQ(again.models, first.models);
@@ -125,7 +125,7 @@ TEST_F(CellStoreSeed, ModelsAreTheRepositoryDocuments) {
   }
   // Every seeded entity has its history row, by "seed".
   const auto h = s.history();
-  EXPECT_EQ(h.size(), 10u);  // 2 machines, 1 tool, 1 material, 2 parts, 4 models
+  EXPECT_EQ(h.size(), 11u);  // 2 machines, 1 tool, 1 material, 3 parts, 4 models
   for (const auto& e : h) {
     EXPECT_EQ(e.author, "seed");
     EXPECT_EQ(e.action, "created");

@@ -40,22 +40,31 @@ struct Selection {
 
 // SMC I when a validated, unsuspected force-process model and milling model
 // exist for the job's tool and material (and part, when models are part
-// specific) on in.machine; SMC II otherwise. The explanation names the
-// machine and lists every model considered (suspect ones with the reason).
+// specific) on in.machine; else SMC II+ when the part allows a spindle speed
+// change and in.machine can override its spindle speed; SMC II otherwise.
+// The explanation names the machine, lists every model considered (suspect
+// ones with the reason) and says why not SMC II+ when the part allows it.
 Selection select_variant(const PlanInputs& in);
+
+// The machine's drive has a spindle speed override (module O): the
+// simulated mill has; the LinuxCNC drive has not yet.
+bool machine_can_change_spindle_speed(const store::Machine& m);
 
 // Binds the job to a machine and selects its variant: the job's own machine
 // when it names one; else the first available machine (in the given order)
 // whose models allow SMC I (when none is available, the first with such
-// models); else SMC II for any machine, the explanation giving each
-// machine's reason. Fills in.machine and in.models.
+// models); else, when the part allows a speed change, SMC II+ on the first
+// available machine that can override its spindle speed; else SMC II for
+// any machine, the explanation giving each machine's reason. Fills
+// in.machine and in.models.
 Selection bind_and_select(PlanInputs& in, const std::vector<MachineModels>& machines);
 
 struct Plan {
   smc::config::SupervisorConfig config;  // machine fields left for dispatch
   double critical_depth_mm = -1;  // SMC I: time-domain critical depth at the programmed speed
   double planning_s = 0;
-  std::string machine_id;              // SMC I: the machine whose models it used; else empty
+  std::string machine_id;              // SMC I: the machine whose models it used; SMC II+: the
+                                       // machine whose spindle it moves; else empty
   std::vector<std::string> model_ids;  // the models it used
   // SMC I: the feeds the stability check covered (mm/tooth): the programmed
   // feed, the eq. 1 equilibrium feed at the pass's F_ref, and the lower
@@ -106,7 +115,7 @@ class Planner {
   const PlannerOptions& options() const noexcept { return options_; }
 
  private:
-  std::string smc1_text_, smc1_guarded_text_, smc2_text_;
+  std::string smc1_text_, smc1_guarded_text_, smc2_text_, smc2_plus_text_;
   smc::config::SupervisorConfig defaults_;
   PlannerOptions options_;
 };

@@ -54,6 +54,9 @@ struct Part {
   double feedrate_mm_s = 0;        // programmed feedrate
   double spindle_rpm = 0;          // programmed spindle speed
   std::int64_t retired_at_ms = 0;  // 0: in use
+  // Its tolerances allow the spindle to leave the programmed speed (a
+  // chatter remedy of SMC II+, module O).
+  bool speed_change_allowed = false;
 };
 
 enum class ModelKind : std::uint8_t {

@@ -2,7 +2,8 @@
 // Seed data for the demo cell: the catalog documents of cell/catalog/ — the
 // paper's machine (as "mill-1" and "mill-2"), its face mill and 6061-T6
 // aluminium; a transfer-line part with validated models ("bracket-tl",
-// SMC I) and a job-shop part without any ("housing-js", SMC II) — applied
+// SMC I) and job-shop parts without any ("housing-js", SMC II; "cover-jsp",
+// which allows a spindle speed change, SMC II+) — applied
 // exactly as `smc-cell catalog apply cell/catalog` would.
 
 #include <cstdint>
