@@ -138,6 +138,7 @@ std::vector<Event> CellState::on_chatter(const smc_data_ChatterEvent& e) {
       .field("energy_ratio", e.energy_ratio)
       .field("pass_index", e.pass_index)
       .field("new_pass_count", e.new_pass_count)
+      .field("new_spindle_rpm", e.new_spindle_rpm)
       .field("job_id", get_string(e.job_id))
       .end_object();
   std::lock_guard lock(impl_->mu);

@@ -10,7 +10,9 @@
 // cell and N edges on the same topics (for the dashboard's own benchmarks,
 // which need many mills cheaply).
 //
-// Mills are named mill-1 .. mill-N; mill-1 runs SMC II.
+// Mills are named mill-1 .. mill-N; mill-1 runs SMC II. With breakage: true
+// (real cell, two mills or more), mill-2 cuts the cover under SMC II+ and its
+// tooth 2 breaks 5 s into the job (smc-edge run --break-tooth).
 
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
@@ -33,7 +35,7 @@ async function fakeCell({ binDir, partition, mills }) {
   return { kind: 'fake', procs: [p], log: p };
 }
 
-async function realCell({ binDir, partition, mills }) {
+async function realCell({ binDir, partition, mills, breakage }) {
   const dir = mkdtempSync(join(tmpdir(), 'smc-browser-'));
   const db = join(dir, 'cell.db');
   execFileSync(`${binDir}/smc-cell`, ['db', 'init', '--db', db, '--seed'], { stdio: 'ignore' });
@@ -41,22 +43,28 @@ async function realCell({ binDir, partition, mills }) {
     ['serve', '--db', db, '--partition', partition])];
   for (let i = 1; i <= mills; i++) {
     const mill = `mill-${i}`;
+    const extra = breakage && mill === 'mill-2' ? ['--break-tooth', '2@5'] : [];
     procs.push(new Proc(`smc-edge ${mill}`, `${binDir}/smc-edge`,
       ['run', '--machine', mill, '--partition', partition, '--paced', '--no-realtime',
-       '--mill-model', join(sourceDir, 'cell/models/paper_face_mill.textproto')]));
+       '--mill-model', join(sourceDir, 'cell/models/paper_face_mill.textproto'), ...extra]));
   }
   // mill-1 cuts the job-shop part under SMC II for the length of the test.
   const job = join(dir, 'job.textproto');
   writeFileSync(job, 'part_id: "housing-js"\nmachine_id: "mill-1"\n');
   execFileSync(`${binDir}/smc-cell`, ['job', 'submit', job, '--db', db], { stdio: 'ignore' });
+  if (breakage && mills >= 2) {
+    const cover = join(dir, 'cover.textproto');
+    writeFileSync(cover, 'part_id: "cover-jsp"\nmachine_id: "mill-2"\n');
+    execFileSync(`${binDir}/smc-cell`, ['job', 'submit', cover, '--db', db], { stdio: 'ignore' });
+  }
   const cleanup = () => rmSync(dir, { recursive: true, force: true });
   return { kind: 'real', procs, log: procs[0], cleanup };
 }
 
 // Starts the cell and `mills` mills in `partition`; resolves once they run.
-export async function startCell({ binDir, partition, mills = 2, kind: wanted }) {
+export async function startCell({ binDir, partition, mills = 2, kind: wanted, breakage = false }) {
   const kind = wanted ?? process.env.SMC_TEST_CELL ?? 'real';
-  const cell = kind === 'real' ? await realCell({ binDir, partition, mills })
+  const cell = kind === 'real' ? await realCell({ binDir, partition, mills, breakage })
                                : await fakeCell({ binDir, partition, mills });
   cell.mills = Array.from({ length: mills }, (_, i) => `mill-${i + 1}`);
   cell.stop = async () => {

@@ -10,7 +10,10 @@
 //      edge in feed hold, checked on DDS (the command with the operator's
 //      name, then the edge's situation: step 5 active, module C), and the
 //      page shows it; release brings it back;
-//   5. a screenshot is saved: $SMC_ARTIFACTS_DIR/dashboard.png.
+//   5. a screenshot is saved: $SMC_ARTIFACTS_DIR/dashboard.png;
+//   6. mill-2 cuts the cover under SMC II+: its chatter's remedy is the new
+//      spindle speed, and the tooth that breaks 5 s into the job shows as
+//      "tool broken" on its card and in its view (dashboard-breakage.png).
 //
 // Environment (ctest sets it): SMC_BIN_DIR, SMC_NODE_MODULES (playwright-core
 // from npm ci), SMC_ARTIFACTS_DIR, CYCLONEDDS_URI (loopback profile).
@@ -55,7 +58,7 @@ async function main() {
     step(`partition ${partition}: probe, cell and mills, dashboard`);
     const probe = new Proc('probe', `${BIN}/smc-dashboard-probe`, ['--partition', partition, '--mill', 'mill-1']);
     await probe.waitFor(/^ready$/, 10000);
-    await startCell({ binDir: BIN, partition, mills: 2 });
+    await startCell({ binDir: BIN, partition, mills: 2, breakage: true });
     const dash = new Proc('dashboard', `${BIN}/smc-dashboard`,
       ['--http', '127.0.0.1:0', '--partition', partition, '--token-file', tokens]);
     const [, url] = await dash.waitFor(/listening on (http:\/\/\S+)/, 10000);
@@ -149,14 +152,25 @@ async function main() {
     await page.waitForFunction(() => !document.querySelector('svg.grafcet g.step.active[data-step="5"]'), null,
       { timeout: 5000 });
 
+    step('6. SMC II+ on mill-2: the speed change and the broken tooth');
+    await page.goto(`${url}#/`);
+    await page.waitForSelector('.mill-card[data-mill="mill-2"] .breakage-flag', { timeout: 20000 });
+    await page.goto(`${url}#/mill/mill-2`);
+    await page.waitForSelector('#mill-view[data-mill="mill-2"]');
+    await page.waitForFunction(() => /tool broken\s*tool breakage at 5\.\d+ s/.test(
+      document.querySelector('#breakage')?.textContent ?? ''), null, { timeout: 5000 });
+    await page.waitForFunction(() => /spindle speed → 2700 rpm/.test(
+      document.querySelector('#chatter-list')?.textContent ?? ''), null, { timeout: 5000 });
+    await page.screenshot({ path: join(ARTIFACTS, 'dashboard-breakage.png'), fullPage: true });
     await page.goto(`${url}#/`);
     await page.waitForSelector('.mill-card[data-mill="mill-2"]', { timeout: 5000 });
     // The cell's catalog, read-only: its machines with their edges, and what
-    // a job of each part would get and why.
+    // a job of each part would get and why -- here that the parts' tool is
+    // retired, since mill-2 found it broken.
     await page.waitForFunction(() => {
       const t = document.querySelector('#catalog')?.textContent ?? '';
       return t.includes('mill-2') && t.includes('bracket-tl') && t.includes('housing-js') &&
-        t.includes('SMC II on any machine');
+        t.includes('cover-jsp') && t.includes('default tool fm-r25-4t is retired');
     }, null, { timeout: 5000 });
     await page.screenshot({ path: join(ARTIFACTS, 'dashboard-cell.png'), fullPage: true });
 

@@ -12,6 +12,7 @@ const MODULES = {
   D: 'operator chatter detector', E: 'automatic chatter detector', F: 'chatter suppressor',
   G: 'chatter suppression routine', H: 'parameter estimator', I: 'force signal processor',
   J: 'contact monitor', K: 'adaptive force controller', L: 'model-based force controller',
+  M: 'spindle power monitor', N: 'tool-breakage detector', O: 'spindle-speed chatter suppressor',
 };
 const HISTORY_S = 120;        // kept per mill in the browser
 const MAX_POINTS = 4000;      // per mill, trimmed in chunks
@@ -69,6 +70,7 @@ function applyMillState(s) {
   if (s.job) {
     m.jobId = s.job.job_id;
     store.jobs.set(s.job.job_id, s.job);
+    if (s.job.progress) noteBreakage(m, s.job.progress);
   }
   if (s.summary) appendPoint(m, s.summary);
   if (s.situation) appendSituation(m, s.situation);
@@ -102,6 +104,16 @@ function appendSituation(m, s) {
   if (last && s.t <= last.t) return;
   m.situations.push({ t: s.t, modules_mask: s.modules_mask, step_indices: s.step_indices });
   if (m.situations.length > 2000) m.situations.splice(0, 500);
+}
+
+// Module N's stop fails the mill's job with the reason ("tool breakage
+// ..."): shown until the mill runs another job.
+function noteBreakage(m, p) {
+  if (p.phase === 'JOB_FAILED' && (p.message ?? '').startsWith('tool breakage')) {
+    m.breakage = { t: p.t, message: p.message, job_id: p.job_id };
+  } else if (p.phase === 'JOB_RUNNING' && m.breakage && m.breakage.job_id !== p.job_id) {
+    m.breakage = null;
+  }
 }
 
 function setJob(j) {
@@ -178,6 +190,7 @@ function connect() {
   });
   on('progress', (p) => {
     const m = mill(p.machine_id);
+    noteBreakage(m, p);
     m.jobId = p.job_id;
     const j = store.jobs.get(p.job_id) ?? { job_id: p.job_id, machine_id: p.machine_id, status: null };
     store.jobs.set(p.job_id, { ...j, progress: p });
@@ -286,7 +299,7 @@ function toast(text, kind) {
 }
 
 const fmt = (v, d = 0, unit = '') => (v == null || !isFinite(v) ? '-' : v.toFixed(d) + unit);
-const variantName = (v) => ({ SMC_I: 'SMC I', SMC_II: 'SMC II', SMC_NONE: 'no control' }[v] ?? '-');
+const variantName = (v) => ({ SMC_I: 'SMC I', SMC_II: 'SMC II', SMC_II_PLUS: 'SMC II+', SMC_NONE: 'no control' }[v] ?? '-');
 const stateName = (s) => (s ? s.replace(/^EDGE_|^JOB_/, '').replace('_', ' ').toLowerCase() : 'unknown');
 
 function edgeBadge(m) {
@@ -461,7 +474,8 @@ function cellView() {
           h('div', {}, h('span', { class: 'label' }, 'F_Y '), h('span', { class: 'big' }, fmt(s?.f_y_peak_n, 0)), ' N'),
           h('div', {}, h('span', { class: 'label' }, 'F_ref '), fmt(s?.f_ref_n || null, 0, ' N')),
           h('div', {}, h('span', { class: 'label' }, 'feed '), fmt(s?.feedrate_mm_s, 1, ' mm/s')),
-          ...(s?.chatter ? [h('div', { class: 'chatter-flag' }, 'chatter')] : []));
+          ...(s?.chatter ? [h('div', { class: 'chatter-flag' }, 'chatter')] : []),
+          ...(m.breakage ? [h('div', { class: 'breakage-flag', title: m.breakage.message }, 'tool broken')] : []));
         const hist = m.hist;
         const from = hist.t.length ? hist.t[hist.t.length - 1] - 30 : 0;
         let i0 = hist.t.findIndex((t) => t >= from);
@@ -513,7 +527,11 @@ function marksFor(m) {
       passes.push({ t: h.t[i], label: `pass ${h.pass[i] + 1}/${h.count[i]}` });
     }
   }
-  const chatter = m.chatter.map((c) => ({ t: c.t, label: `chatter (${c.source}${c.frequency_hz ? ', ' + c.frequency_hz.toFixed(0) + ' Hz' : ''})` }));
+  const chatter = m.chatter.map((c) => ({
+    t: c.t,
+    label: `chatter (${c.source}${c.frequency_hz ? ', ' + c.frequency_hz.toFixed(0) + ' Hz' : ''})${c.new_spindle_rpm > 0 ? ' → ' + c.new_spindle_rpm.toFixed(0) + ' rpm' : ''}`,
+  }));
+  if (m.breakage) chatter.push({ t: m.breakage.t, label: 'tool broken: feed held' });
   return { spans, passes, chatter };
 }
 
@@ -567,6 +585,9 @@ function millView(id) {
         fact('contact', s ? (s.in_contact ? 'yes' : 'no') : '-'),
         fact('machine time', s ? formatMachineTime(s.t, 2) : '-'),
         fact('config in force', mm.config?.config_id ?? '-'),
+        ...(mm.breakage
+          ? [h('div', { class: 'fact breakage', id: 'breakage' }, h('span', { class: 'breakage-flag' }, 'tool broken'), ' ', mm.breakage.message)]
+          : []),
         ...(mm.status?.refused_config_id
           ? [h('div', { class: 'fact refused', title: mm.status.refusal },
               h('span', { class: 'muted' }, 'last refused '),
@@ -596,10 +617,12 @@ function millView(id) {
       root.querySelector('#mill-jobs').replaceChildren(jobsTable([...store.jobs.values()].filter(
         (j) => (j.machine_id || j.status?.machine_id) === id), false));
       root.querySelector('#chatter-list').replaceChildren(mm.chatter.length ? h('table', { class: 'events' },
-        h('thead', {}, h('tr', {}, ...['machine time', 'source', 'frequency', 'ratio', 'pass', 'passes now', 'job'].map((t) => h('th', {}, t)))),
+        h('thead', {}, h('tr', {}, ...['machine time', 'source', 'frequency', 'ratio', 'pass', 'remedy', 'job'].map((t) => h('th', {}, t)))),
         h('tbody', {}, ...mm.chatter.slice(-8).reverse().map((c) => h('tr', {},
           h('td', {}, formatMachineTime(c.t, 2)), h('td', {}, c.source), h('td', { class: 'num' }, c.frequency_hz ? fmt(c.frequency_hz, 0, ' Hz') : '-'),
-          h('td', { class: 'num' }, fmt(c.energy_ratio, 1)), h('td', { class: 'num' }, c.pass_index + 1), h('td', { class: 'num' }, c.new_pass_count), h('td', {}, c.job_id)))))
+          h('td', { class: 'num' }, fmt(c.energy_ratio, 1)), h('td', { class: 'num' }, c.pass_index + 1),
+          h('td', { class: 'remedy' }, c.new_spindle_rpm > 0 ? `spindle speed → ${fmt(c.new_spindle_rpm, 0, ' rpm')}` : `${c.new_pass_count} passes`),
+          h('td', {}, c.job_id)))))
         : h('p', { class: 'muted' }, 'No chatter events.'));
       // The program as a CNC control is given it: the plan's (from the
       // configuration in force) until the chatter suppressor rewrites it,
