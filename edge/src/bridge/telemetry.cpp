@@ -140,12 +140,17 @@ void EdgeService::Impl::on_event(const EdgeEvent& e) {
         chatter_writer.write(*pending_chatter);
         pending_chatter.reset();
       }
-      const std::string what =
-          speed ? fmt::format("spindle speed changed to {:.0f} rpm (chatter at {:.0f} Hz)", e.value,
-                              e.frequency_hz)
-                : "program rewritten to " + std::to_string(job->program.count) + " passes";
-      spdlog::warn("{}: {}", opt.machine_id, what);
-      publish_progress(smc_data_JOB_RUNNING, what);
+      if (speed) {
+        const std::string what = fmt::format(
+            "spindle speed changed to {:.0f} rpm (chatter at {:.0f} Hz)", e.value, e.frequency_hz);
+        spdlog::warn("{}: {}", opt.machine_id, what);
+        publish_progress(smc_data_JOB_RUNNING, what);
+      } else {
+        spdlog::warn("{}: chatter suppressor rewrote the program to {} passes", opt.machine_id,
+                     job->program.count);
+        publish_progress(smc_data_JOB_RUNNING,
+                         "program rewritten to " + std::to_string(job->program.count) + " passes");
+      }
       break;
     }
     case EventKind::kToolBroken: {

@@ -128,7 +128,8 @@ first_cell_line() { be_logs cell | first_line_after "$1" "$2"; }
 edge_chatter() {
   local n=0 svc k
   for svc in edge-1 edge-2; do
-    k=$(be_logs "$svc" | grep -c "chatter suppressor rewrote" || true)
+    # A chatter suppressed: a pass added (SMC II), or the spindle moved (SMC II+).
+    k=$(be_logs "$svc" | grep -cE "chatter suppressor rewrote|spindle speed changed to" || true)
     n=$((n + k))
   done
   echo "$n"
