@@ -82,6 +82,7 @@ if [[ -x "$bin/smc-dashboard" ]]; then
   token=$(head -c 24 /dev/urandom | od -An -tx1 | tr -d ' \n')
   ( umask 077; echo "operator $token" >"$run/tokens" )
   "$bin/smc-dashboard" --http 127.0.0.1:8080 --partition "$partition" --token-file "$run/tokens" \
+    --cell-db "$run/cell.db" \
     >"$run/dashboard.log" 2>&1 &
   pids+=($!)
   echo "== dashboard:     http://127.0.0.1:8080/"

@@ -4,6 +4,8 @@
 #include <google/protobuf/util/json_util.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <optional>
 #include <string_view>
@@ -12,6 +14,7 @@
 #include "auth.hpp"
 #include "cell_state.hpp"
 #include "command.hpp"
+#include "job_history.hpp"
 #include "json.hpp"
 
 namespace smc::dashboard {
@@ -228,6 +231,39 @@ void Api::handle(const HttpRequest& req, std::function<void(HttpResponse)> reply
   if (n == 2 && seg[1] == "jobs") {
     const std::string* mill = query("mill");
     return simple_get(deps_.state.jobs_json(mill ? *mill : std::string()));
+  }
+  // A job's history from the cell's database: JSON for the page, CSV to export.
+  if (n == 4 && seg[1] == "jobs" &&
+      (seg[3] == "history" || seg[3] == "history.csv" || seg[3] == "lobes")) {
+    if (!get) return reply(method_not_allowed("GET"));
+    if (deps_.history == nullptr) {
+      return reply(error_response(
+          404, "job history needs the cell's database: start smc-dashboard with --cell-db FILE"));
+    }
+    const std::string& job = seg[2];
+    const bool plain =
+        !job.empty() && job.size() <= 64 && std::all_of(job.begin(), job.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '_' ||
+                 c == '.';
+        });
+    if (!plain) return reply(error_response(400, "job id is not 1-64 of [A-Za-z0-9._-]"));
+    const bool csv = seg[3] == "history.csv";
+    std::optional<std::string> body;
+    try {
+      body = csv                 ? deps_.history->csv(seg[2])
+             : seg[3] == "lobes" ? deps_.history->lobes(seg[2])
+                                 : deps_.history->json(seg[2]);
+    } catch (const std::exception& e) {
+      return reply(error_response(503, std::string("the cell's database: ") + e.what()));
+    }
+    if (!body) return reply(error_response(404, "no such job in the cell's database: " + seg[2]));
+    if (!csv) return reply(json_response(200, std::move(*body)));
+    HttpResponse r;
+    r.content_type = "text/csv; charset=utf-8";
+    r.body = std::move(*body);
+    r.headers.emplace_back("Content-Disposition",
+                           "attachment; filename=\"" + seg[2] + "-history.csv\"");
+    return reply(std::move(r));
   }
   if (n == 2 && seg[1] == "events") {
     const std::string* mill = query("mill");

@@ -11,6 +11,8 @@
 
 namespace smc::dashboard {
 
+class JobHistory;
+
 class Assets;
 class Auth;
 class CellState;
@@ -49,6 +51,7 @@ class Api {
     CommandSink& commands;
     const Assets& assets;
     std::function<std::string()> stats;  // the server's /api/stats body
+    JobHistory* history = nullptr;       // the cell's database (--cell-db), or none
   };
   explicit Api(Deps deps) : deps_(std::move(deps)) {}
 

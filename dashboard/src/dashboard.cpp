@@ -14,6 +14,7 @@
 #include "cell_state.hpp"
 #include "dds_bridge.hpp"
 #include "http_server.hpp"
+#include "job_history.hpp"
 
 namespace smc::dashboard {
 
@@ -61,6 +62,11 @@ Auth load_auth(const Options& o) {
   return o.token_file.empty() ? Auth() : Auth::from_file(o.token_file);
 }
 
+std::unique_ptr<JobHistory> open_history(const Options& o) {
+  if (o.cell_db.empty()) return nullptr;
+  return std::make_unique<JobHistory>(o.cell_db);
+}
+
 }  // namespace
 
 struct Dashboard::Impl {
@@ -68,7 +74,9 @@ struct Dashboard::Impl {
       : options(o),
         auth(load_auth(o)),
         assets(o.web_root),
-        api(Api::Deps{state, auth, bridge_proxy, assets, [this] { return stats(); }}),
+        history(open_history(o)),
+        api(Api::Deps{state, auth, bridge_proxy, assets, [this] { return stats(); },
+                      history.get()}),
         server(http_options(o), api, state),
         bridge(dds_options(o), state, server) {
     bridge_proxy.target = &bridge;
@@ -98,6 +106,7 @@ struct Dashboard::Impl {
   Options options;
   Auth auth;
   Assets assets;
+  std::unique_ptr<JobHistory> history;  // null without --cell-db
   CellState state;
   BridgeProxy bridge_proxy;
   Api api;

@@ -23,6 +23,9 @@ int main(int argc, char** argv) {
   app.add_option("--partition", o.partition, "DDS partition (default: the default partition)");
   app.add_option("--dds-config", o.dds_config,
                  "Cyclone DDS XML or file://PATH (default: $CYCLONEDDS_URI, else loopback)");
+  app.add_option("--cell-db", o.cell_db,
+                 "The cell's SQLite database (smc-cell serve --db), read on each job history "
+                 "page and CSV export (opened on the first; it may not exist yet at start)");
   app.add_option("--token-file", o.token_file,
                  "operator tokens, one 'NAME TOKEN' per line (without it: read-only)")
       ->check(CLI::ExistingFile);

@@ -28,6 +28,7 @@
 #                .../paper_face_mill_mismatched.textproto for a mill that
 #                differs from the cell's database
 #   dashboard: SMC_HTTP [0.0.0.0:8080]  SMC_TOKEN_FILE (operator tokens; read-only without)
+#              SMC_CELL_DB (the cell's database, for job history pages; none without)
 set -euo pipefail
 
 service=${1:-help}
@@ -85,6 +86,7 @@ case "$service" in
   dashboard)
     args=(--http "${SMC_HTTP:-0.0.0.0:8080}" --domain "$domain" --partition "$partition")
     [[ -n "${SMC_TOKEN_FILE:-}" ]] && args+=(--token-file "$SMC_TOKEN_FILE")
+    [[ -n "${SMC_CELL_DB:-}" ]] && args+=(--cell-db "$SMC_CELL_DB")
     exec smc-dashboard "${args[@]}" "$@"
     ;;
   help | -h | --help)

@@ -12,7 +12,8 @@
 //
 // Mills are named mill-1 .. mill-N; mill-1 runs SMC II. With breakage: true
 // (real cell, two mills or more), mill-2 cuts the cover under SMC II+ and its
-// tooth 2 breaks 5 s into the job (smc-edge run --break-tooth).
+// tooth 2 breaks 5 s into the job (smc-edge run --break-tooth), and an SMC I
+// job for the bracket waits behind mill-1's.
 
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
@@ -56,9 +57,14 @@ async function realCell({ binDir, partition, mills, breakage }) {
     const cover = join(dir, 'cover.textproto');
     writeFileSync(cover, 'part_id: "cover-jsp"\nmachine_id: "mill-2"\n');
     execFileSync(`${binDir}/smc-cell`, ['job', 'submit', cover, '--db', db], { stdio: 'ignore' });
+    // An SMC I job queued behind mill-1's: planned (its plan on the lobe
+    // diagram), not cut during the test.
+    const bracket = join(dir, 'bracket.textproto');
+    writeFileSync(bracket, 'part_id: "bracket-tl"\nmachine_id: "mill-1"\n');
+    execFileSync(`${binDir}/smc-cell`, ['job', 'submit', bracket, '--db', db], { stdio: 'ignore' });
   }
   const cleanup = () => rmSync(dir, { recursive: true, force: true });
-  return { kind: 'real', procs, log: procs[0], cleanup };
+  return { kind: 'real', procs, log: procs[0], cleanup, db };
 }
 
 // Starts the cell and `mills` mills in `partition`; resolves once they run.

@@ -13,7 +13,12 @@
 //   5. a screenshot is saved: $SMC_ARTIFACTS_DIR/dashboard.png;
 //   6. mill-2 cuts the cover under SMC II+: its chatter's remedy is the new
 //      spindle speed, and the tooth that breaks 5 s into the job shows as
-//      "tool broken" on its card and in its view (dashboard-breakage.png).
+//      "tool broken" on its card and in its view (dashboard-breakage.png);
+//   7. the failed job's history page, from the cell's database: charts,
+//      events, plan and programs, its CSV export, and the same page again
+//      after the dashboard restarts (dashboard-job.png; load time printed);
+//   8. a planned SMC I job's page shows its plan on the lobe diagram with
+//      the margin (dashboard-job-smc1.png).
 //
 // Environment (ctest sets it): SMC_BIN_DIR, SMC_NODE_MODULES (playwright-core
 // from npm ci), SMC_ARTIFACTS_DIR, CYCLONEDDS_URI (loopback profile).
@@ -58,9 +63,10 @@ async function main() {
     step(`partition ${partition}: probe, cell and mills, dashboard`);
     const probe = new Proc('probe', `${BIN}/smc-dashboard-probe`, ['--partition', partition, '--mill', 'mill-1']);
     await probe.waitFor(/^ready$/, 10000);
-    await startCell({ binDir: BIN, partition, mills: 2, breakage: true });
-    const dash = new Proc('dashboard', `${BIN}/smc-dashboard`,
-      ['--http', '127.0.0.1:0', '--partition', partition, '--token-file', tokens]);
+    const cell = await startCell({ binDir: BIN, partition, mills: 2, breakage: true });
+    const dashArgs = ['--http', '127.0.0.1:0', '--partition', partition, '--token-file', tokens,
+      '--cell-db', cell.db];
+    const dash = new Proc('dashboard', `${BIN}/smc-dashboard`, dashArgs);
     const [, url] = await dash.waitFor(/listening on (http:\/\/\S+)/, 10000);
 
     step(`chromium on ${url}`);
@@ -173,6 +179,52 @@ async function main() {
         t.includes('cover-jsp') && t.includes('default tool fm-r25-4t is retired');
     }, null, { timeout: 5000 });
     await page.screenshot({ path: join(ARTIFACTS, 'dashboard-cell.png'), fullPage: true });
+
+    step('7. the failed job\'s history page, its CSV, and again after a dashboard restart');
+    const jobId = await page.evaluate(() => window.smcApp.store.mills.get('mill-2').breakage.job_id);
+    const checkHistory = async (base) => {
+      await page.goto(`${base}#/job/${jobId}`);
+      await page.waitForSelector(`#job-view[data-job="${jobId}"][data-ready="true"]`, { timeout: 5000 });
+      const ms = await page.evaluate(() => window.smcApp.jobLoadMs);
+      step(`   history page of ${jobId} drawn in ${ms.toFixed(0)} ms`);
+      assert.ok(ms < 1000, `history page took ${ms} ms`);
+      assert.ok(await page.locator('#job-force canvas').count() > 0, 'the F_Y chart is drawn');
+      assert.ok(await page.locator('#job-power canvas').count() > 0, 'the power chart is drawn');
+      const text = await page.locator('#job-view').textContent();
+      for (const want of ['tool breakage at 5.', 'spindle speed changed to 2700 rpm', 'SMC II+ on mill-2',
+        'smc2_plus.grafcet', 'revision 1']) {
+        assert.ok(text.includes(want), `the history page shows "${want}"`);
+      }
+      const csv = await page.evaluate(async (id) => {
+        const r = await fetch(`/api/jobs/${id}/history.csv`);
+        return { status: r.status, type: r.headers.get('content-type'), body: await r.text() };
+      }, jobId);
+      assert.equal(csv.status, 200);
+      assert.ok(csv.type.startsWith('text/csv'), csv.type);
+      const lines = csv.body.trim().split('\n');
+      assert.ok(lines[0].startsWith('job_id,attempt,t_s,'), lines[0]);
+      const recorded = await page.evaluate(() => Number(document.querySelector('#job-facts').textContent.match(/revolutions recorded\s*(\d+)/)[1]));
+      assert.equal(lines.length - 1, recorded, 'one CSV row per recorded revolution');
+      assert.ok(recorded > 50, `${recorded} revolutions recorded`);
+    };
+    await checkHistory(url);
+    await page.screenshot({ path: join(ARTIFACTS, 'dashboard-job.png'), fullPage: true });
+    await dash.stop();
+    const dash2 = new Proc('dashboard-2', `${BIN}/smc-dashboard`, dashArgs);
+    const [, url2] = await dash2.waitFor(/listening on (http:\/\/\S+)/, 10000);
+    await checkHistory(url2);
+
+    step('8. the planned SMC I job on its lobe diagram');
+    await page.waitForFunction(() => [...window.smcApp.store.jobs.values()].some(
+      (j) => j.status?.job?.part_id === 'bracket-tl' && j.status?.variant === 'SMC_I'), null, { timeout: 10000 });
+    const smc1 = await page.evaluate(() => [...window.smcApp.store.jobs.values()].find(
+      (j) => j.status?.job?.part_id === 'bracket-tl').job_id);
+    await page.goto(`${url2}#/job/${smc1}`);
+    await page.waitForSelector(`#job-view[data-job="${smc1}"][data-ready="true"]`, { timeout: 5000 });
+    await page.waitForSelector('#job-lobes-panel:not([hidden]) #job-lobes canvas', { timeout: 10000 });
+    const lobeText = await page.locator('#job-lobes-text').textContent();
+    assert.match(lobeText, /planned 1\.00 mm per pass at 1500 rpm; critical depth there [\d.]+ mm by the lobes, [\d.]+ mm by the plan's time-domain check; margin 0\.\d+/);
+    await page.screenshot({ path: join(ARTIFACTS, 'dashboard-job-smc1.png'), fullPage: true });
 
     assert.deepEqual(pageErrors, [], 'no errors in the page');
     step('PASS');

@@ -116,7 +116,16 @@ struct CellService::Impl {
   tr::Reader<smc_data_ForceSummary> summary_reader;
   tr::Topic<smc_data_ChatterEvent> chatter_topic;
   tr::Reader<smc_data_ChatterEvent> chatter_reader;
+  smc::wire::DocumentSubscriber<cfg::PartProgram> program_reader;
   tr::Dispatcher dispatcher;
+  // Job history: revolutions received and not yet written, by job id
+  // (written in one transaction about twice a second and when the job ends).
+  std::map<std::string, std::vector<store::JobRevolution>> history;
+  // The job whose history a mill's summaries and programs belong to: its
+  // last job, until another starts (the edge drains its last revolutions
+  // after it reports the job's end).
+  std::map<std::string, std::string> recording;  // machine -> job
+  Clock::time_point history_flushed = Clock::now();
 
   std::map<std::string, Mill> mills;
   std::map<std::string, Progress> progress;                             // by job id
@@ -161,6 +170,7 @@ struct CellService::Impl {
         summary_reader(summary_topic),
         chatter_topic(participant),
         chatter_reader(chatter_topic),
+        program_reader(participant),
         dispatcher(participant) {
     dispatcher.on_instances(
         edge_reader,
@@ -169,6 +179,7 @@ struct CellService::Impl {
     dispatcher.on(progress_reader, [this] { take_progress(); });
     dispatcher.on(chatter_reader, [this] { take_chatter(); });
     dispatcher.poll([this] { take_summaries(); });  // high rate: in batches, never a wake-up
+    dispatcher.on(program_reader.reader(), [this] { take_programs(); });
     refresh_machines();
   }
 
@@ -493,10 +504,14 @@ struct CellService::Impl {
       pr.chatter = std::max(pr.chatter, p.chatter_events);
       pr.peak_force = p.peak_force_n;
       const std::string msg = get_string(p.message);
-      if (p.phase == smc_data_JOB_RUNNING) cutting[j->machine_id] = job_id;
+      if (p.phase == smc_data_JOB_RUNNING) {
+        cutting[j->machine_id] = job_id;
+        recording[j->machine_id] = job_id;
+      }
       if (p.phase == smc_data_JOB_DONE || p.phase == smc_data_JOB_FAILED ||
           p.phase == smc_data_JOB_INTERRUPTED) {
         record_stable_cuts(*j);
+        flush_history();
       }
       switch (p.phase) {
         case smc_data_JOB_RUNNING:
@@ -683,11 +698,72 @@ struct CellService::Impl {
 
   // ---------------------------------------------------------- learning --
 
+  // ------------------------------------------------------- job history --
+
+  // The programs a job ran: each one its mill publishes while the job runs
+  // (rewrites, speed changes; the plan's is the job's plan).
+  void take_programs() {
+    program_reader.take(
+        [&](const std::string& machine, const cfg::PartProgram& p) {
+          const auto it = recording.find(machine);
+          if (it == recording.end()) return;
+          const auto j = db.job(it->second);
+          if (!j) return;
+          store::JobProgram jp;
+          jp.attempt = j->attempt;
+          jp.revision = p.revision();
+          jp.gcode = p.gcode();
+          jp.passes = static_cast<std::uint32_t>(p.passes_size());
+          try {
+            db.add_program(j->id, jp);
+          } catch (const std::exception& e) {
+            spdlog::warn("job {}: program revision {} not recorded: {}", j->id, p.revision(),
+                         e.what());
+          }
+        },
+        [](const tr::EnvelopeRejection&) {});
+  }
+
+  void flush_history() {
+    history_flushed = Clock::now();
+    for (auto& [job_id, revs] : history) {
+      if (revs.empty()) continue;
+      try {
+        const auto j = db.job(job_id);
+        if (!j) continue;
+        for (auto& r : revs) r.attempt = j->attempt;
+        db.append_revolutions(job_id, revs);
+      } catch (const std::exception& e) {
+        spdlog::warn("job {}: {} revolutions of its history not recorded: {}", job_id, revs.size(),
+                     e.what());
+      }
+      revs.clear();
+    }
+    std::erase_if(history, [](const auto& kv) { return kv.second.empty(); });
+  }
+
   void take_summaries() {
     summary_reader.take([&](const smc_data_ForceSummary& s, const tr::SampleInfo& info) {
       if (!info.valid_data) return;
       const std::string machine = get_string(s.machine_id);
       last_summary[machine] = s;
+      if (auto it = recording.find(machine); it != recording.end()) {
+        store::JobRevolution r;
+        r.t_s = static_cast<double>(s.machine_time_ns) * 1e-9;
+        r.revolution = s.revolution;
+        r.pass_index = s.pass_index;
+        r.pass_count = s.pass_count;
+        r.depth_mm = s.depth_mm;
+        r.f_y_n = s.f_y_peak_n;
+        r.f_ref_n = s.f_ref_n;
+        r.feedrate_mm_s = s.feedrate_mm_s;
+        r.feed_per_tooth_mm = s.feed_per_tooth_mm;
+        r.spindle_rpm = s.spindle_rpm;
+        r.spindle_power_w = s.spindle_power_w;
+        r.in_contact = s.in_contact;
+        r.chatter = s.chatter;
+        history[it->second].push_back(r);
+      }
       if (s.in_contact && !s.chatter && s.depth_mm > 0 && s.spindle_rpm > 0) {
         if (auto it = cutting.find(machine); it != cutting.end()) {
           auto& c =
@@ -712,6 +788,9 @@ struct CellService::Impl {
         learning[j.id].push_back({s.depth_mm, s.feed_per_tooth_mm, s.f_y_peak_n});
       }
     });
+    if (!history.empty() && Clock::now() - history_flushed > std::chrono::milliseconds(500)) {
+      flush_history();
+    }
   }
 
   // From an SMC II run's per-revolution data: a candidate force-process

@@ -444,4 +444,77 @@ std::vector<JobEvent> Store::events(const std::string& job_id) {
   return out;
 }
 
+void Store::append_revolutions(const std::string& job_id, const std::vector<JobRevolution>& revs) {
+  if (revs.empty()) return;
+  detail::Tx tx(db_.get(), path_);
+  Stmt s(
+      db_.get(), path_,
+      "INSERT INTO job_revolutions (job_id, attempt, t_s, revolution, pass_index, pass_count, "
+      "depth_mm, f_y_n, f_ref_n, feedrate_mm_s, feed_per_tooth_mm, spindle_rpm, "
+      "spindle_power_w, in_contact, chatter) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  for (const auto& r : revs) {
+    s.bind(job_id, static_cast<std::int64_t>(r.attempt), r.t_s,
+           static_cast<std::int64_t>(r.revolution), static_cast<std::int64_t>(r.pass_index),
+           static_cast<std::int64_t>(r.pass_count), r.depth_mm, r.f_y_n, r.f_ref_n, r.feedrate_mm_s,
+           r.feed_per_tooth_mm, r.spindle_rpm,
+           std::isnan(r.spindle_power_w) ? std::optional<double>() : r.spindle_power_w,
+           static_cast<std::int64_t>(r.in_contact ? 1 : 0),
+           static_cast<std::int64_t>(r.chatter ? 1 : 0));
+    s.run();
+    s.reset();
+  }
+  tx.commit();
+}
+
+std::vector<JobRevolution> Store::revolutions(const std::string& job_id) {
+  Stmt s(db_.get(), path_,
+         "SELECT attempt, t_s, revolution, pass_index, pass_count, depth_mm, f_y_n, f_ref_n, "
+         "feedrate_mm_s, feed_per_tooth_mm, spindle_rpm, spindle_power_w, in_contact, chatter "
+         "FROM job_revolutions WHERE job_id = ? ORDER BY attempt, t_s");
+  s.bind(job_id);
+  std::vector<JobRevolution> out;
+  while (s.step()) {
+    JobRevolution r;
+    r.attempt = static_cast<std::uint32_t>(s.int64(0));
+    r.t_s = s.real(1);
+    r.revolution = static_cast<std::uint32_t>(s.int64(2));
+    r.pass_index = static_cast<std::uint32_t>(s.int64(3));
+    r.pass_count = static_cast<std::uint32_t>(s.int64(4));
+    r.depth_mm = s.real(5);
+    r.f_y_n = s.real(6);
+    r.f_ref_n = s.real(7);
+    r.feedrate_mm_s = s.real(8);
+    r.feed_per_tooth_mm = s.real(9);
+    r.spindle_rpm = s.real(10);
+    r.spindle_power_w = s.is_null(11) ? std::nan("") : s.real(11);
+    r.in_contact = s.int64(12) != 0;
+    r.chatter = s.int64(13) != 0;
+    out.push_back(r);
+  }
+  return out;
+}
+
+void Store::add_program(const std::string& job_id, const JobProgram& p) {
+  Stmt(db_.get(), path_,
+       "INSERT OR IGNORE INTO job_programs (job_id, attempt, revision, time_ms, passes, gcode) "
+       "VALUES (?, ?, ?, ?, ?, ?)")
+      .bind(job_id, static_cast<std::int64_t>(p.attempt), static_cast<std::int64_t>(p.revision),
+            p.time_ms != 0 ? p.time_ms : detail::now_ms(), static_cast<std::int64_t>(p.passes),
+            p.gcode)
+      .run();
+}
+
+std::vector<JobProgram> Store::programs(const std::string& job_id) {
+  Stmt s(db_.get(), path_,
+         "SELECT attempt, revision, time_ms, passes, gcode FROM job_programs WHERE job_id = ? "
+         "ORDER BY attempt, revision");
+  s.bind(job_id);
+  std::vector<JobProgram> out;
+  while (s.step()) {
+    out.push_back({static_cast<std::uint32_t>(s.int64(0)), static_cast<std::uint32_t>(s.int64(1)),
+                   s.int64(2), s.text(4), static_cast<std::uint32_t>(s.int64(3))});
+  }
+  return out;
+}
+
 }  // namespace smc::cell::store

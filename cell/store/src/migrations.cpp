@@ -192,6 +192,38 @@ BEGIN SELECT RAISE(ABORT, 'stability_evidence is append-only'); END;
 ALTER TABLE parts ADD COLUMN speed_change_allowed INTEGER NOT NULL DEFAULT 0
   CHECK (speed_change_allowed IN (0, 1));
 )sql"},
+    Migration{6, "job history: revolutions and programs as run", R"sql(
+-- Per job, what the edge reported of each revolution (force summaries) and
+-- each program it ran (the plan's, rewrites, speed changes): the job's
+-- history page and export read them after the job and any restart.
+CREATE TABLE job_revolutions (
+  job_id            TEXT NOT NULL REFERENCES jobs (id),
+  attempt           INTEGER NOT NULL,
+  t_s               REAL NOT NULL,
+  revolution        INTEGER NOT NULL,
+  pass_index        INTEGER NOT NULL,
+  pass_count        INTEGER NOT NULL,
+  depth_mm          REAL NOT NULL,
+  f_y_n             REAL NOT NULL,
+  f_ref_n           REAL NOT NULL,
+  feedrate_mm_s     REAL NOT NULL,
+  feed_per_tooth_mm REAL NOT NULL,
+  spindle_rpm       REAL NOT NULL,
+  spindle_power_w   REAL,
+  in_contact        INTEGER NOT NULL,
+  chatter           INTEGER NOT NULL
+);
+CREATE INDEX job_revolutions_by_job ON job_revolutions (job_id, attempt, t_s);
+CREATE TABLE job_programs (
+  job_id   TEXT NOT NULL REFERENCES jobs (id),
+  attempt  INTEGER NOT NULL,
+  revision INTEGER NOT NULL,
+  time_ms  INTEGER NOT NULL,
+  passes   INTEGER NOT NULL,
+  gcode    TEXT NOT NULL,
+  PRIMARY KEY (job_id, attempt, revision)
+);
+)sql"},
 };
 
 }  // namespace

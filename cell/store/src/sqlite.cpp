@@ -104,6 +104,11 @@ void Stmt::run() {
   if (step()) fail_here(SQLITE_MISUSE, "sqlite3_step (a statement meant to return no rows)");
 }
 
+void Stmt::reset() {
+  sqlite3_reset(stmt_);
+  sqlite3_clear_bindings(stmt_);
+}
+
 bool Stmt::is_null(int col) const { return sqlite3_column_type(stmt_, col) == SQLITE_NULL; }
 std::int64_t Stmt::int64(int col) const { return sqlite3_column_int64(stmt_, col); }
 double Stmt::real(int col) const { return sqlite3_column_double(stmt_, col); }

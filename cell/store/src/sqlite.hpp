@@ -48,8 +48,9 @@ class Stmt {
     (bind_one(++i, args), ...);
     return *this;
   }
-  bool step();  // true: a row is ready; false: done
-  void run();   // steps to the end; a returned row is an error
+  bool step();   // true: a row is ready; false: done
+  void run();    // steps to the end; a returned row is an error
+  void reset();  // ready to bind and run again (bindings cleared)
 
   bool is_null(int col) const;
   std::int64_t int64(int col) const;

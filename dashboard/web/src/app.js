@@ -4,7 +4,7 @@
 // controls). Data: GET /api/... once, then the Server-Sent Events stream
 // /api/stream. See dashboard/README.md for both.
 
-import { ForceChart, PowerChart, RawChart, Sparkline, formatMachineTime } from './charts.js';
+import { ForceChart, LobeChart, PowerChart, RawChart, Sparkline, formatMachineTime } from './charts.js';
 import { GrafcetView } from './grafcet.js';
 
 const MODULES = {
@@ -337,7 +337,8 @@ function jobsTable(jobs, showMill) {
     const planned = st?.passes_planned ?? passCount;
     const chatter = Math.max(st?.chatter_events ?? 0, p?.chatter_events ?? 0);
     return h('tr', { dataset: { job: j.job_id } },
-      h('td', {}, h('div', { class: 'strong' }, j.job_id), h('div', { class: 'muted small' }, st?.job?.part_id ?? '')),
+      h('td', {}, h('a', { class: 'strong job-link', href: `#/job/${encodeURIComponent(j.job_id)}`, title: 'the job\'s history' }, j.job_id),
+        h('div', { class: 'muted small' }, st?.job?.part_id ?? '')),
       showMill && h('td', {}, j.machine_id || st?.machine_id || '-'),
       h('td', {}, h('span', { class: `badge job-${state.toLowerCase()}` }, stateName(state))),
       h('td', {}, h('span', { class: `badge variant ${st?.variant ?? ''}` }, variantName(st?.variant))),
@@ -660,6 +661,153 @@ function millView(id) {
   };
 }
 
+// A job's history page (#/job/ID), from the cell's database through the
+// dashboard (GET /api/jobs/ID/history): kept after the job ends and after a
+// dashboard restart. F_Y, feed and spindle power of every recorded
+// revolution, the events, the plan and why, the programs as run, CSV export.
+function jobView(id) {
+  const started = performance.now();
+  const enc = encodeURIComponent(id);
+  const head = h('section', { class: 'panel job-head' },
+    h('div', { class: 'title' }, h('h1', {}, id), h('span', { id: 'job-state' }), h('span', { id: 'job-variant' })),
+    h('div', { id: 'job-facts', class: 'facts' }),
+    h('div', { class: 'controls' },
+      h('a', { id: 'job-csv', class: 'button', href: `/api/jobs/${enc}/history.csv`, download: `${id}-history.csv` }, 'Export CSV'),
+      h('a', { class: 'button', href: '#/' }, 'Back to the cell')));
+  const force = h('section', { class: 'panel force' }, h('h2', {}, 'F_Y per revolution, reference, feed'), h('div', { id: 'job-force' }));
+  const power = h('section', { class: 'panel power' }, h('h2', {}, 'Spindle power per revolution, against the machine\'s limit'), h('div', { id: 'job-power' }));
+  const events = h('section', { class: 'panel' }, h('h2', {}, 'Events'), h('div', { id: 'job-events' }));
+  const plan = h('section', { class: 'panel' }, h('h2', {}, 'Plan and why'), h('div', { id: 'job-plan' }));
+  const programs = h('section', { class: 'panel' }, h('h2', {}, 'Part program as run'), h('div', { id: 'job-programs' }));
+  const lobes = h('section', { class: 'panel', id: 'job-lobes-panel', hidden: true },
+    h('h2', {}, 'The plan on its lobe diagram'), h('p', { id: 'job-lobes-text' }), h('div', { id: 'job-lobes' }));
+  const root = h('main', { id: 'job-view', dataset: { job: id } }, head, force, power,
+    h('div', { class: 'two' }, events, plan), lobes, programs);
+  let forceChart = null;
+  let powerChart = null;
+  let lobeChart = null;
+  let marks = { spans: [], passes: [], chatter: [] };
+  const onResize = () => { forceChart?.resize(); powerChart?.resize(); };
+  window.addEventListener('resize', onResize);
+
+  function draw(d) {
+    const r = d.revolutions;
+    root.querySelector('#job-state').replaceChildren(h('span', { class: `badge job-${d.state.toLowerCase()}` }, d.state));
+    root.querySelector('#job-variant').replaceChildren(h('span', { class: 'badge variant' }, d.variant));
+    const res = d.result;
+    root.querySelector('#job-facts').replaceChildren(
+      fact('part', d.part_id), fact('tool', d.tool_id), fact('machine', d.machine_id || '-'),
+      fact('attempt', String(d.attempt)),
+      fact('cycle time', res?.cycle_time_s ? `${res.cycle_time_s.toFixed(1)} s` : '-'),
+      fact('chatter events', String(res?.chatter_events ??
+        d.events.filter((e) => e.note && e.reason.startsWith('chatter event')).length)),
+      fact('chatter revolutions', String(r.chatter.filter(Boolean).length)),
+      fact('revolutions recorded', String(r.count)),
+      fact('peak F_Y', r.count ? `${Math.max(...r.f_y_peak_n).toFixed(0)} N` : '-'));
+    // Marks: pass boundaries and the first revolution of each chatter run.
+    const passes = [];
+    const chatter = [];
+    for (let i = 0; i < r.count; i++) {
+      if (i === 0 || r.pass_index[i] !== r.pass_index[i - 1] || r.pass_count[i] !== r.pass_count[i - 1]) {
+        passes.push({ t: r.t[i], label: `pass ${r.pass_index[i] + 1}/${r.pass_count[i]}` });
+      }
+      if (r.chatter[i] && (i === 0 || !r.chatter[i - 1])) chatter.push({ t: r.t[i], label: 'chatter' });
+    }
+    // The breakage, at the machine time the edge's reason gives.
+    const broken = d.events.map((e) => e.reason.match(/tool breakage at ([\d.]+) s/)).find(Boolean);
+    if (broken) chatter.push({ t: Number(broken[1]), label: 'tool broken' });
+    marks = { spans: [], passes, chatter };
+    forceChart.setData([r.t, r.f_y_peak_n, r.f_ref_n.map((v) => (v > 0 ? v : null)), r.feedrate_mm_s]);
+    const limit = d.max_spindle_power_w || null;
+    powerChart.setData([r.t, r.spindle_power_w, r.t.map(() => limit)]);
+    root.querySelector('#job-events').replaceChildren(d.events.length ? h('table', { class: 'events' },
+      h('thead', {}, h('tr', {}, ...['time', 'state', 'what'].map((t) => h('th', {}, t)))),
+      h('tbody', {}, ...d.events.map((e) => h('tr', {},
+        h('td', {}, new Date(Number(e.time_ms)).toLocaleTimeString()),
+        h('td', {}, e.note ? 'note' : `${e.from === 'JOB_STATE_UNSPECIFIED' ? '' : e.from + ' → '}${e.to}`),
+        h('td', { class: 'reason' }, e.reason)))))
+      : h('p', { class: 'muted' }, 'No events.'));
+    const p = d.plan;
+    root.querySelector('#job-plan').replaceChildren(
+      h('p', { class: 'explanation' }, d.explanation || 'not planned'),
+      ...(p ? [h('table', { class: 'events' },
+        h('thead', {}, h('tr', {}, ...['pass', 'depth', 'feed', 'speed', 'F_ref'].map((t) => h('th', {}, t)))),
+        h('tbody', {}, ...p.passes.map((x, i) => h('tr', {},
+          h('td', { class: 'num' }, i + 1), h('td', { class: 'num' }, fmt(x.depth_mm, 2, ' mm')),
+          h('td', { class: 'num' }, fmt(x.feedrate_mm_s, 1, ' mm/s')), h('td', { class: 'num' }, fmt(x.spindle_rpm, 0, ' rpm')),
+          h('td', { class: 'num' }, x.force_reference_n ? fmt(x.force_reference_n, 0, ' N') : 'P_max / V'))))),
+        h('p', { class: 'muted small' }, `supervisor ${p.grafcet_name}, modules ${p.modules.join('')}`)] : []));
+    const progs = [];
+    if (p?.gcode) progs.push(h('div', {}, h('h3', {}, 'as planned'), h('pre', { class: 'gcode' }, p.gcode)));
+    for (const x of d.programs) {
+      progs.push(h('div', {}, h('h3', {}, `attempt ${x.attempt}, revision ${x.revision}: ${x.passes} passes`),
+        h('pre', { class: 'gcode' }, x.gcode || '(no G-code)')));
+    }
+    root.querySelector('#job-programs').replaceChildren(...(progs.length ? progs : [h('p', { class: 'muted' }, 'No program recorded.')]));
+    root.dataset.ready = 'true';
+    window.smcApp.jobLoadMs = performance.now() - started;
+    if (d.variant === 'SMC I' && p) drawLobes(d);
+  }
+
+  // SMC I: the plan on its lobe diagram (computed by the dashboard from the
+  // plan's structural model), with the margin.
+  function drawLobes(d) {
+    fetch(`/api/jobs/${enc}/lobes`).then((r) => r.json()).then((l) => {
+      if (!l.lobes) return;
+      lobes.hidden = false;
+      const rpm = l.planned_rpm;
+      const depth = Math.max(...l.planned_depths_mm);
+      const xs = l.lobes.rpm.slice();
+      const ys = l.lobes.critical_depth_mm.slice();
+      let i = xs.findIndex((x) => x >= rpm);
+      if (i < 0) i = xs.length;
+      const lo = Math.max(0, i - 1);
+      const hi = Math.min(xs.length - 1, i);
+      const w = xs[hi] === xs[lo] ? 0 : (rpm - xs[lo]) / (xs[hi] - xs[lo]);
+      const sdm = ys[lo] + w * (ys[hi] - ys[lo]);
+      if (xs[i] !== rpm) { xs.splice(i, 0, rpm); ys.splice(i, 0, sdm); }
+      const tdsMatch = d.explanation.match(/Critical depth at [\d.]+ rpm on \S+: ([\d.]+) mm/);
+      const tds = tdsMatch ? Number(tdsMatch[1]) : null;
+      const planned = xs.map((x, k) => (k === i ? depth : null));
+      const checked = xs.map((x, k) => (k === i ? tds : null));
+      lobeChart = new LobeChart(lobes.querySelector('#job-lobes'));
+      lobeChart.setData([xs, ys, planned, checked]);
+      const ref = tds ?? sdm;
+      lobes.querySelector('#job-lobes-text').textContent =
+        `planned ${depth.toFixed(2)} mm per pass at ${rpm.toFixed(0)} rpm; critical depth there ` +
+        `${sdm.toFixed(2)} mm by the lobes` + (tds ? `, ${tds.toFixed(2)} mm by the plan's time-domain check` : '') +
+        `; margin ${(depth / ref).toFixed(2)} of critical (${((1 - depth / ref) * 100).toFixed(0)} % below it).`;
+    }).catch(() => {});
+  }
+
+  return {
+    root,
+    mounted() {
+      forceChart = new ForceChart(force.querySelector('#job-force'), () => marks, Infinity);
+      powerChart = new PowerChart(power.querySelector('#job-power'), () => marks, Infinity);
+      fetch(`/api/jobs/${enc}/history`).then(async (res) => {
+        const body = await res.json();
+        if (!res.ok) {
+          root.querySelector('#job-facts').replaceChildren(h('p', { class: 'error' }, body.error ?? `HTTP ${res.status}`));
+          root.dataset.ready = 'error';
+          return;
+        }
+        draw(body);
+      }).catch((e) => {
+        root.querySelector('#job-facts').replaceChildren(h('p', { class: 'error' }, String(e)));
+        root.dataset.ready = 'error';
+      });
+    },
+    render() {},
+    destroy() {
+      window.removeEventListener('resize', onResize);
+      forceChart?.destroy();
+      powerChart?.destroy();
+      lobeChart?.destroy();
+    },
+  };
+}
+
 function fact(label, value) {
   return h('div', { class: 'fact' }, h('span', { class: 'label' }, label), h('span', { class: 'value' }, value));
 }
@@ -675,11 +823,14 @@ function route() {
     checkSession();
   }
   const m = location.hash.match(/^#\/mill\/(.+)$/);
+  const jm = location.hash.match(/^#\/job\/(.+)$/);
   const focus = m ? decodeURIComponent(m[1]) : null;
-  if (view && focus === store.focus) return;
+  const jobFocus = jm ? decodeURIComponent(jm[1]) : null;
+  if (view && focus === store.focus && jobFocus === store.jobFocus) return;
   view?.destroy();
   store.focus = focus;
-  view = focus ? millView(focus) : cellView();
+  store.jobFocus = jobFocus;
+  view = jobFocus ? jobView(jobFocus) : focus ? millView(focus) : cellView();
   document.getElementById('view').replaceChildren(view.root);
   view.mounted?.();
   rebuildNav();

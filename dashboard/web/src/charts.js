@@ -221,3 +221,37 @@ export class Sparkline {
   setData(cols) { this.u.setData(cols); }
   destroy() { this.u.destroy(); }
 }
+
+// An SMC I plan on its lobe diagram: the critical depth against spindle
+// speed (semi-discretization of the plan's structural model), the planned
+// depth per pass at the planned speed, and the plan's own time-domain
+// critical depth there.
+export class LobeChart {
+  constructor(el) {
+    this.el = el;
+    const dot = (color, size) => ({ paths: () => null, points: { show: true, size, stroke: color, fill: color } });
+    const opts = {
+      ...size(el, 260),
+      class: 'lobe-chart',
+      legend: { live: true },
+      cursor: { drag: { x: false, y: false } },
+      scales: { x: { time: false }, y: { range: (u, min, max) => [0, Math.max(1, max * 1.1)] } },
+      axes: [
+        { label: 'spindle speed (rpm)', stroke: css('--axis') },
+        { label: 'depth of cut (mm)', stroke: css('--axis'), grid: { stroke: css('--grid') } },
+      ],
+      series: [
+        { label: 'speed', value: (u, v) => (v == null ? '' : v.toFixed(0) + ' rpm') },
+        { label: 'critical depth (lobes)', stroke: '#1c7ed6', width: 1.6, spanGaps: true,
+          value: (u, v) => (v == null ? '' : v.toFixed(2) + ' mm') },
+        { label: 'planned depth per pass', ...dot('#2f9e44', 10), value: (u, v) => (v == null ? '' : v.toFixed(2) + ' mm') },
+        { label: 'critical depth (time domain, the plan\'s check)', ...dot('#e03131', 8),
+          value: (u, v) => (v == null ? '' : v.toFixed(2) + ' mm') },
+      ],
+    };
+    this.u = new uPlot(opts, [[], [], [], []], el);
+  }
+  setData(cols) { this.u.setData(cols); }
+  resize() { this.u.setSize(size(this.el, 260)); }
+  destroy() { this.u.destroy(); }
+}

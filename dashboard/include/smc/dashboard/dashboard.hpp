@@ -28,6 +28,7 @@ struct Options {
   std::string dds_config;  // Cyclone DDS XML or file://; empty: CYCLONEDDS_URI or loopback
   std::string token_file;  // "NAME TOKEN" lines; empty: read-only dashboard
   std::string web_root;    // serve the page from this folder instead of the embedded copy
+  std::string cell_db;     // the cell's SQLite database: job history pages; empty: none
 
   std::size_t max_streams = 64;
   std::size_t stream_queue_events = 1024;  // per stream client; oldest dropped beyond

@@ -140,6 +140,36 @@ struct Job {
   std::optional<smc::config::RunSummary> result;      // record_result
 };
 
+// One revolution of a job as the cell received it from the edge's force
+// summaries (best-effort telemetry: a lost sample is a gap), for the job's
+// history page and export.
+struct JobRevolution {
+  std::uint32_t attempt = 0;
+  double t_s = 0;  // machine time since the job's start
+  std::uint32_t revolution = 0;
+  std::uint32_t pass_index = 0;
+  std::uint32_t pass_count = 0;
+  double depth_mm = 0;
+  double f_y_n = 0;
+  double f_ref_n = 0;
+  double feedrate_mm_s = 0;
+  double feed_per_tooth_mm = 0;
+  double spindle_rpm = 0;
+  double spindle_power_w = 0;  // NaN: the drive cannot tell
+  bool in_contact = false;
+  bool chatter = false;
+};
+
+// A part program a job ran: the plan's, then each rewrite or speed change
+// the edge published.
+struct JobProgram {
+  std::uint32_t attempt = 0;
+  std::uint32_t revision = 0;
+  std::int64_t time_ms = 0;
+  std::string gcode;
+  std::uint32_t passes = 0;
+};
+
 struct JobEvent {
   std::string job_id;
   std::int64_t seq = 0;  // 1, 2, ... per job, in order

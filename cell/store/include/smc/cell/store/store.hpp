@@ -196,6 +196,12 @@ class Store {
   std::vector<Job> jobs(const JobFilter& filter = {});  // in submission order
   std::optional<Job> job(const std::string& id);
   std::vector<JobEvent> events(const std::string& job_id);  // in order
+  // The job's recorded revolutions (appended in one transaction) and the
+  // programs it ran (a revision recorded once per attempt), in order.
+  void append_revolutions(const std::string& job_id, const std::vector<JobRevolution>& revs);
+  std::vector<JobRevolution> revolutions(const std::string& job_id);
+  void add_program(const std::string& job_id, const JobProgram& program);
+  std::vector<JobProgram> programs(const std::string& job_id);
 
  private:
   struct Close {
