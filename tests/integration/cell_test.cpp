@@ -207,7 +207,8 @@ TEST_F(Cell, DemoJobsCompleteWithTheExpectedSmcChoice) {
 // planned SMC II+ for a simulated mill; its chatter moves the spindle to a
 // stable pocket; tooth 2 breaks 12.5 s into the job, module N stops the feed,
 // the edge fails the job with the reason and the cell retires the tool, so
-// the next job for it is refused at planning.
+// a job already planned with it fails instead of being dispatched, and a new
+// one is refused at submission.
 TEST_F(Cell, ABrokenToothFailsTheJobAndRetiresTheTool) {
   start_cell();
   start_edge("mill-1", "cell/models/paper_face_mill.textproto", "8", {"--break-tooth", "2@12.5"});
@@ -218,9 +219,22 @@ TEST_F(Cell, ABrokenToothFailsTheJobAndRetiresTheTool) {
   }
   const std::string id = submit(file.string());
   ASSERT_FALSE(id.empty());
+  // A second job for the same mill, planned while the first cuts: when it
+  // would be dispatched, its tool is broken.
+  const std::string next = submit(file.string());
+  ASSERT_FALSE(next.empty());
   ASSERT_TRUE(wait_jobs(
-      {id}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s))
-      << "the job did not end";
+      {id, next}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s))
+      << "the jobs did not end";
+  {
+    const auto n = *job(next);
+    EXPECT_EQ(n.state, cfg::JOB_FAILED);
+    EXPECT_EQ(n.attempt, 0u) << "dispatched with a broken tool";
+    std::string why;
+    for (const auto& e : events(next)) why += e.reason + "\n";
+    EXPECT_NE(why.find("tool fm-r25-4t was retired after the job was planned"), std::string::npos)
+        << why;
+  }
   const auto j = *job(id);
   EXPECT_EQ(j.variant, cfg::SMC_II_PLUS) << j.explanation;
   EXPECT_NE(j.explanation.find("SMC II+ on mill-1"), std::string::npos) << j.explanation;

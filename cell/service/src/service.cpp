@@ -386,6 +386,16 @@ struct CellService::Impl {
     const auto planned = db.jobs({.state = cfg::JOB_PLANNED, .with_documents = true});
     std::vector<PlannedJob> candidates;
     for (const auto& j : planned) {
+      // A tool retired since the plan (found broken on another job) cuts
+      // nothing more: the job fails with the reason.
+      if (const auto t = db.tool(j.spec.tool_id()); t && t->retired_at_ms != 0) {
+        move(j, cfg::JOB_FAILED,
+             "tool " + t->id +
+                 " was retired after the job was planned (`smc-cell catalog show "
+                 "tool " +
+                 t->id + "` says why); submit it again with another tool");
+        continue;
+      }
       // A plan made from one machine's models goes only to that machine.
       const std::string& on = j.spec.machine_id().empty() ? j.planned_for : j.spec.machine_id();
       candidates.push_back({j.id, j.spec.priority(), on, j.attempt});
