@@ -1,0 +1,245 @@
+#!/usr/bin/env bash
+# The cell's DDS Security material (OMG DDS-Security 1.1, Cyclone DDS's
+# builtin plugins), made with OpenSSL:
+#
+#   deploy/security/pki.sh init DIR [--machines mill-1,mill-2]
+#       an identity CA and a permissions CA (EC P-256), the governance
+#       document, and for the cell, each edge and the dashboard an identity
+#       certificate and key, a permissions document (signed) and a Cyclone
+#       DDS profile (loopback, with its Security section)
+#   deploy/security/pki.sh issue DIR NAME ROLE [MACHINE]
+#       one more participant (ROLE: cell, edge, dashboard, observer), or a
+#       new certificate for an existing one (rotation: the old one stays
+#       valid until it expires or is revoked)
+#   deploy/security/pki.sh revoke DIR NAME
+#       re-signs NAME's permissions with a validity that ended (it is refused
+#       from its next handshake on) and moves its identity aside
+#
+# Layout of DIR: ca/ (identity_ca.pem, permissions_ca.pem and their keys),
+# governance.p7s, NAME/{identity.pem,identity.key,permissions.p7s,
+# cyclonedds.xml}. Point a process at NAME/cyclonedds.xml with
+# CYCLONEDDS_URI=file://DIR/NAME/cyclonedds.xml.
+set -euo pipefail
+
+usage() { sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 2; }
+[[ $# -ge 2 ]] || usage
+cmd=$1
+dir=$(realpath -m "$2")
+shift 2
+days=365
+
+subject() { echo "/C=XX/O=SMC cell/CN=$1"; }
+
+ca() {  # ca NAME
+  local n=$1
+  openssl ecparam -name prime256v1 -genkey -noout -out "$dir/ca/$n.key" 2>/dev/null
+  openssl req -x509 -new -key "$dir/ca/$n.key" -sha256 -days $((days * 5)) \
+    -subj "$(subject "SMC $n")" -out "$dir/ca/$n.pem" 2>/dev/null
+  chmod 600 "$dir/ca/$n.key"
+}
+
+sign() {  # sign IN.xml OUT.p7s: S/MIME signed by the permissions CA
+  openssl smime -sign -in "$1" -text -out "$2" -signer "$dir/ca/permissions_ca.pem" \
+    -inkey "$dir/ca/permissions_ca.key" 2>/dev/null
+}
+
+governance() {
+  cat >"$dir/governance.xml" <<'XML'
+<?xml version="1.0" encoding="UTF-8"?>
+<dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
+     xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-Security/20170801/omg_shared_ca_governance.xsd">
+  <domain_access_rules>
+    <domain_rule>
+      <domains><id_range><min>0</min><max>230</max></id_range></domains>
+      <allow_unauthenticated_participants>false</allow_unauthenticated_participants>
+      <enable_join_access_control>true</enable_join_access_control>
+      <discovery_protection_kind>ENCRYPT</discovery_protection_kind>
+      <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>
+      <rtps_protection_kind>NONE</rtps_protection_kind>
+      <topic_access_rules>
+        <!-- Configuration, assignments, operator commands: access-controlled and signed. -->
+        <topic_rule>
+          <topic_expression>smc_config</topic_expression>
+          <enable_discovery_protection>true</enable_discovery_protection>
+          <enable_liveliness_protection>false</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>SIGN</metadata_protection_kind>
+          <data_protection_kind>NONE</data_protection_kind>
+        </topic_rule>
+        <topic_rule>
+          <topic_expression>smc_job</topic_expression>
+          <enable_discovery_protection>true</enable_discovery_protection>
+          <enable_liveliness_protection>false</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>SIGN</metadata_protection_kind>
+          <data_protection_kind>NONE</data_protection_kind>
+        </topic_rule>
+        <topic_rule>
+          <topic_expression>smc_operator_command</topic_expression>
+          <enable_discovery_protection>true</enable_discovery_protection>
+          <enable_liveliness_protection>false</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>SIGN</metadata_protection_kind>
+          <data_protection_kind>NONE</data_protection_kind>
+        </topic_rule>
+        <!-- Telemetry, status, events: access-controlled, not signed (cost). -->
+        <topic_rule>
+          <topic_expression>*</topic_expression>
+          <enable_discovery_protection>false</enable_discovery_protection>
+          <enable_liveliness_protection>false</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>NONE</metadata_protection_kind>
+          <data_protection_kind>NONE</data_protection_kind>
+        </topic_rule>
+      </topic_access_rules>
+    </domain_rule>
+  </domain_access_rules>
+</dds>
+XML
+  sign "$dir/governance.xml" "$dir/governance.p7s"
+}
+
+# What each role may publish and subscribe (topic names in idl/README.md).
+grants() {  # grants ROLE
+  case "$1" in
+    cell) echo "pub:* sub:*" ;;
+    edge) echo "pub:smc_force_summary,smc_force_batch,smc_chatter_event,smc_supervisor_situation,smc_edge_status,smc_job_progress,smc_program sub:smc_config,smc_job,smc_operator_command" ;;
+    dashboard) echo "pub:smc_operator_command sub:*" ;;
+    observer) echo "pub: sub:*" ;;
+    *) echo "pki.sh: unknown role '$1' (cell, edge, dashboard, observer)" >&2; exit 2 ;;
+  esac
+}
+
+topics_xml() {  # topics_xml LIST
+  local t
+  IFS=, read -ra list <<<"$1"
+  for t in "${list[@]}"; do [[ -n "$t" ]] && echo "            <topic>$t</topic>"; done
+}
+
+permissions() {  # permissions NAME ROLE [NOT_AFTER]
+  local name=$1 role=$2 not_after=${3:-2036-01-01T00:00:00}
+  local g pub sub
+  g=$(grants "$role")
+  pub=${g%% sub:*}; pub=${pub#pub:}
+  sub=${g##* sub:}
+  {
+    cat <<XML
+<?xml version="1.0" encoding="UTF-8"?>
+<dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
+     xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-Security/20170801/omg_shared_ca_permissions.xsd">
+  <permissions>
+    <grant name="$name">
+      <subject_name>$(openssl x509 -in "$dir/$name/identity.pem" -noout -subject -nameopt RFC2253 | sed 's/^subject=//')</subject_name>
+      <validity><not_before>2020-01-01T00:00:00</not_before><not_after>$not_after</not_after></validity>
+      <allow_rule>
+        <domains><id_range><min>0</min><max>230</max></id_range></domains>
+XML
+    # Every partition (a cell's --partition); topics as the role allows.
+    if [[ -n "$pub" ]]; then
+      echo "        <publish><topics>"; topics_xml "$pub"
+      echo "        </topics><partitions><partition>*</partition></partitions></publish>"
+    fi
+    if [[ -n "$sub" ]]; then
+      echo "        <subscribe><topics>"; topics_xml "$sub"
+      echo "        </topics><partitions><partition>*</partition></partitions></subscribe>"
+    fi
+    cat <<XML
+      </allow_rule>
+      <default>DENY</default>
+    </grant>
+  </permissions>
+</dds>
+XML
+  } >"$dir/$name/permissions.xml"
+  sign "$dir/$name/permissions.xml" "$dir/$name/permissions.p7s"
+}
+
+profile() {  # profile NAME
+  local d="$dir/$1"
+  cat >"$d/cyclonedds.xml" <<XML
+<?xml version="1.0" encoding="UTF-8"?>
+<!-- $1: the loopback profile (deploy/cyclonedds/loopback.xml) with DDS Security. -->
+<CycloneDDS xmlns="https://cdds.io/config">
+  <Domain id="any">
+    <General>
+      <Interfaces><NetworkInterface name="lo"/></Interfaces>
+      <AllowMulticast>false</AllowMulticast>
+    </General>
+    <Discovery>
+      <ParticipantIndex>auto</ParticipantIndex>
+      <MaxAutoParticipantIndex>119</MaxAutoParticipantIndex>
+      <Peers><Peer address="127.0.0.1"/></Peers>
+    </Discovery>
+    <Security>
+      <Authentication>
+        <Library path="dds_security_auth" initFunction="init_authentication" finalizeFunction="finalize_authentication"/>
+        <IdentityCA>file:$dir/ca/identity_ca.pem</IdentityCA>
+        <IdentityCertificate>file:$d/identity.pem</IdentityCertificate>
+        <PrivateKey>file:$d/identity.key</PrivateKey>
+      </Authentication>
+      <AccessControl>
+        <Library path="dds_security_ac" initFunction="init_access_control" finalizeFunction="finalize_access_control"/>
+        <PermissionsCA>file:$dir/ca/permissions_ca.pem</PermissionsCA>
+        <Governance>file:$dir/governance.p7s</Governance>
+        <Permissions>file:$d/permissions.p7s</Permissions>
+      </AccessControl>
+      <Cryptographic>
+        <Library path="dds_security_crypto" initFunction="init_crypto" finalizeFunction="finalize_crypto"/>
+      </Cryptographic>
+    </Security>
+  </Domain>
+</CycloneDDS>
+XML
+}
+
+issue() {  # issue NAME ROLE
+  local name=$1 role=$2 d="$dir/$1"
+  grants "$role" >/dev/null
+  mkdir -p "$d"
+  openssl ecparam -name prime256v1 -genkey -noout -out "$d/identity.key" 2>/dev/null
+  chmod 600 "$d/identity.key"
+  openssl req -new -key "$d/identity.key" -subj "$(subject "$name")" -out "$d/identity.csr" 2>/dev/null
+  openssl x509 -req -in "$d/identity.csr" -CA "$dir/ca/identity_ca.pem" -CAkey "$dir/ca/identity_ca.key" \
+    -CAcreateserial -days "$days" -sha256 -out "$d/identity.pem" 2>/dev/null
+  rm -f "$d/identity.csr"
+  echo "$role" >"$d/role"
+  permissions "$name" "$role"
+  profile "$name"
+  echo "$name ($role): $d/cyclonedds.xml"
+}
+
+case "$cmd" in
+  init)
+    machines=mill-1,mill-2
+    while [[ $# -gt 0 ]]; do
+      case "$1" in
+        --machines) machines=$2; shift 2 ;;
+        *) usage ;;
+      esac
+    done
+    mkdir -p "$dir/ca"
+    ca identity_ca
+    ca permissions_ca
+    governance
+    issue cell cell
+    IFS=, read -ra ms <<<"$machines"
+    for m in "${ms[@]}"; do issue "edge-$m" edge; done
+    issue dashboard dashboard
+    ;;
+  issue)
+    [[ $# -ge 2 ]] || usage
+    issue "$1" "$2"
+    ;;
+  revoke)
+    [[ $# -ge 1 ]] || usage
+    [[ -d "$dir/$1" ]] || { echo "pki.sh: no participant '$1' in $dir" >&2; exit 2; }
+    permissions "$1" "$(cat "$dir/$1/role")" 2020-01-02T00:00:00
+    mv "$dir/$1/identity.key" "$dir/$1/identity.key.revoked"
+    echo "$1: permissions expired (2020-01-02), key moved aside"
+    ;;
+  *) usage ;;
+esac
