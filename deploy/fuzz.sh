@@ -11,7 +11,7 @@
 #     --runs N      N inputs per target from the seeds alone, with a fixed
 #                   random seed: the same inputs every time (deploy/test.sh)
 #     --target NAME only this target (fuzz_grafcet, fuzz_documents,
-#                   fuzz_envelope, fuzz_frf_csv)
+#                   fuzz_envelope, fuzz_frf_csv, fuzz_http)
 #     --jobs N      parallel fuzzing processes per target (default 1)
 #
 # A crash stops the run with its input saved under build/fuzz/artifacts/TARGET
@@ -64,9 +64,10 @@ seed fuzz_documents 04 cell/catalog/*.textproto
 seed fuzz_documents 06 cell/models/paper_face_mill*.textproto cell/models/insperger*.textproto
 seed fuzz_documents 08 cell/models/paper_force_model.textproto
 seed fuzz_frf_csv "" tests/fuzz/seeds/frf/*.csv
+seed fuzz_http "" tests/fuzz/seeds/http/*.bin
 mkdir -p "$work/seeds/fuzz_envelope"
 
-targets=(fuzz_grafcet fuzz_documents fuzz_envelope fuzz_frf_csv)
+targets=(fuzz_grafcet fuzz_documents fuzz_envelope fuzz_frf_csv fuzz_http)
 [[ -z $only ]] || targets=("$only")
 printf "%-16s %12s %10s %8s\n" target executions "exec/s" corpus
 for t in "${targets[@]}"; do

@@ -11,6 +11,7 @@
 #include "auth.hpp"
 #include "cell_state.hpp"
 #include "grafcet_view.hpp"
+#include "http_target.hpp"
 #include "json.hpp"
 #include "smc/wire/topics.hpp"
 #include "smc_config.pb.h"
@@ -204,4 +205,22 @@ TEST(CellState, AChatterEventDeliveredAgainCountsOnce) {
   const auto mill = state.mill_json("m1");
   ASSERT_TRUE(mill.has_value());
   EXPECT_NE(mill->find(R"("chatter_events":2)"), std::string::npos) << *mill;
+}
+
+// Found by fuzz_http: a raw NUL (or any control character) in the request
+// target passed through into the path segments. It is refused now; escapes
+// still decode, %00 is still refused.
+TEST(HttpTarget, RawControlCharactersAreRefused) {
+  using smc::dashboard::parse_target;
+  EXPECT_FALSE(parse_target(std::string_view("/api/a\0b", 8)).has_value());
+  EXPECT_FALSE(parse_target("/api/a\nb").has_value());
+  EXPECT_FALSE(parse_target("/api/mills?x=\x7f").has_value());
+  EXPECT_FALSE(parse_target("/api/a%00b").has_value());
+  const auto t = parse_target("/api/mills/mill%2D1?x=a+b&y=%41");
+  ASSERT_TRUE(t.has_value());
+  ASSERT_EQ(t->segments.size(), 3u);
+  EXPECT_EQ(t->segments[2], "mill-1");
+  ASSERT_EQ(t->query.size(), 2u);
+  EXPECT_EQ(t->query[0].second, "a b");
+  EXPECT_EQ(t->query[1].second, "A");
 }
