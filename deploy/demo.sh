@@ -4,12 +4,15 @@
 # and one job-shop job (SMC II) and prints a live summary until both finish.
 # This is the README's demo command; it installs what it needs first.
 #
-#   deploy/demo.sh [--speedup N] [--keep] [--linuxcnc]
+#   deploy/demo.sh [--speedup N] [--keep] [--linuxcnc] [--secure]
 #     --speedup N  machine seconds per wall second for the simulated mills (default 2)
 #     --keep       leave the cell running after the jobs finish (Ctrl-C ends it)
 #     --linuxcnc   mill-1 is a headless LinuxCNC (deploy/linuxcnc/) whose own
 #                  motion cuts the paper's part through the virtual
 #                  dynamometer, in real time; mill-2 stays simulated
+#     --secure     DDS Security: a fresh PKI (deploy/security/pki.sh) and each
+#                  process on its own identity and permissions (not with
+#                  --linuxcnc yet); without it, DDS is unauthenticated
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -17,15 +20,21 @@ root=$PWD
 speedup=2
 keep=0
 linuxcnc=0
+secure=0
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --speedup) speedup="$2"; shift 2 ;;
     --keep) keep=1; shift ;;
     --linuxcnc) linuxcnc=1; shift ;;
-    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+    --secure) secure=1; shift ;;
+    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
     *) echo "demo: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
+if [[ $secure -eq 1 && $linuxcnc -eq 1 ]]; then
+  echo "demo: --secure with --linuxcnc is not supported yet (LinuxCNC's user reads no keys)" >&2
+  exit 2
+fi
 
 deploy/setup.sh
 echo "== building (ci preset: the same build tree and flags as deploy/test.sh)"
@@ -47,11 +56,21 @@ cleanup() {
 }
 trap cleanup EXIT INT TERM
 
+# The DDS profile of a process: the loopback one, or with --secure its own
+# identity's (each participant authenticated, its topics as its role allows).
+uri() { [[ $secure -eq 1 ]] && echo "file://$run/pki/$1/cyclonedds.xml" || echo "$CYCLONEDDS_URI"; }
+if [[ $secure -eq 1 ]]; then
+  echo "== DDS Security: a PKI in $run/pki (deploy/security/README.md)"
+  deploy/security/pki.sh init "$run/pki" --machines mill-1,mill-2 | sed 's/^/   /'
+  deploy/security/pki.sh issue "$run/pki" mtconnect observer | sed 's/^/   /'
+fi
+
 echo "== cell database (seeded): $run/cell.db"
 "$bin/smc-cell" db init --db "$run/cell.db" --seed
 
 echo "== starting the cell service and two simulated mills (DDS on loopback, partition $partition)"
-"$bin/smc-cell" serve --db "$run/cell.db" --partition "$partition" >"$run/cell.log" 2>&1 &
+CYCLONEDDS_URI=$(uri cell) "$bin/smc-cell" serve --db "$run/cell.db" --partition "$partition" \
+  >"$run/cell.log" 2>&1 &
 pids+=($!)
 # Each simulated mill cuts with its own "true" model: mill-1 is the machine the
 # cell's database describes; mill-2 differs from it (tool 25 % softer, 30 %
@@ -74,22 +93,23 @@ if [[ $linuxcnc -eq 1 ]]; then
 fi
 for m in "${mills[@]}"; do
   echo "   $m cuts as $(basename "${true_model[$m]}")"
-  "$bin/smc-edge" run --machine "$m" --partition "$partition" --paced --speedup "$speedup" \
-    --mill-model "${true_model[$m]}" >"$run/$m.log" 2>&1 &
+  CYCLONEDDS_URI=$(uri "edge-$m") "$bin/smc-edge" run --machine "$m" --partition "$partition" \
+    --paced --speedup "$speedup" --mill-model "${true_model[$m]}" >"$run/$m.log" 2>&1 &
   pids+=($!)
 done
 if [[ -x "$bin/smc-dashboard" ]]; then
   token=$(head -c 24 /dev/urandom | od -An -tx1 | tr -d ' \n')
   ( umask 077; echo "operator $token" >"$run/tokens" )
-  "$bin/smc-dashboard" --http 127.0.0.1:8080 --partition "$partition" --token-file "$run/tokens" \
-    --cell-db "$run/cell.db" \
+  CYCLONEDDS_URI=$(uri dashboard) "$bin/smc-dashboard" --http 127.0.0.1:8080 \
+    --partition "$partition" --token-file "$run/tokens" --cell-db "$run/cell.db" \
     >"$run/dashboard.log" 2>&1 &
   pids+=($!)
   echo "== dashboard:     http://127.0.0.1:8080/"
   echo "   operator link: http://127.0.0.1:8080/#token=$token   (feed hold, release, chatter signal)"
 fi
 
-"$bin/smc-mtconnect" --listen 127.0.0.1:7878 --partition "$partition" >"$run/mtconnect.log" 2>&1 &
+CYCLONEDDS_URI=$(uri mtconnect) "$bin/smc-mtconnect" --listen 127.0.0.1:7878 \
+  --partition "$partition" >"$run/mtconnect.log" 2>&1 &
 pids+=($!)
 echo "== MTConnect adapter: 127.0.0.1:7878 (SHDR; devices: mtconnect/Devices.xml)"
 

@@ -602,9 +602,15 @@ struct CellService::Impl {
       const std::string machine = get_string(e.machine_id);
       if (!chatter_seen.insert(machine + "#" + std::to_string(e.event_id)).second) return;
       const bool automatic = e.source == smc_data_CHATTER_AUTOMATIC;
-      spdlog::warn("{}: chatter ({}) at {:.0f} Hz in job {}, program now {} passes", machine,
-                   automatic ? "automatic" : "operator", e.frequency_hz, get_string(e.job_id),
-                   e.new_pass_count);
+      if (e.new_spindle_rpm > 0) {
+        spdlog::warn("{}: chatter ({}) at {:.0f} Hz in job {}, spindle speed now {:.0f} rpm",
+                     machine, automatic ? "automatic" : "operator", e.frequency_hz,
+                     get_string(e.job_id), e.new_spindle_rpm);
+      } else {
+        spdlog::warn("{}: chatter ({}) at {:.0f} Hz in job {}, program now {} passes", machine,
+                     automatic ? "automatic" : "operator", e.frequency_hz, get_string(e.job_id),
+                     e.new_pass_count);
+      }
       try {
         record_chatter(e, machine, automatic);
       } catch (const std::exception& ex) {
