@@ -43,8 +43,22 @@ sign() {  # sign IN.xml OUT.p7s: S/MIME signed by the permissions CA
     -inkey "$dir/ca/permissions_ca.key" 2>/dev/null
 }
 
+rule() {  # rule TOPIC_EXPRESSION DISCOVERY_PROTECTED METADATA_PROTECTION
+  cat <<XML
+        <topic_rule>
+          <topic_expression>$1</topic_expression>
+          <enable_discovery_protection>$2</enable_discovery_protection>
+          <enable_liveliness_protection>false</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>$3</metadata_protection_kind>
+          <data_protection_kind>NONE</data_protection_kind>
+        </topic_rule>
+XML
+}
+
 governance() {
-  cat >"$dir/governance.xml" <<'XML'
+  cat >"$dir/governance.xml" <<XML
 <?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
      xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-Security/20170801/omg_shared_ca_governance.xsd">
@@ -58,43 +72,9 @@ governance() {
       <rtps_protection_kind>NONE</rtps_protection_kind>
       <topic_access_rules>
         <!-- Configuration, assignments, operator commands: access-controlled and signed. -->
-        <topic_rule>
-          <topic_expression>smc_config</topic_expression>
-          <enable_discovery_protection>true</enable_discovery_protection>
-          <enable_liveliness_protection>false</enable_liveliness_protection>
-          <enable_read_access_control>true</enable_read_access_control>
-          <enable_write_access_control>true</enable_write_access_control>
-          <metadata_protection_kind>SIGN</metadata_protection_kind>
-          <data_protection_kind>NONE</data_protection_kind>
-        </topic_rule>
-        <topic_rule>
-          <topic_expression>smc_job</topic_expression>
-          <enable_discovery_protection>true</enable_discovery_protection>
-          <enable_liveliness_protection>false</enable_liveliness_protection>
-          <enable_read_access_control>true</enable_read_access_control>
-          <enable_write_access_control>true</enable_write_access_control>
-          <metadata_protection_kind>SIGN</metadata_protection_kind>
-          <data_protection_kind>NONE</data_protection_kind>
-        </topic_rule>
-        <topic_rule>
-          <topic_expression>smc_operator_command</topic_expression>
-          <enable_discovery_protection>true</enable_discovery_protection>
-          <enable_liveliness_protection>false</enable_liveliness_protection>
-          <enable_read_access_control>true</enable_read_access_control>
-          <enable_write_access_control>true</enable_write_access_control>
-          <metadata_protection_kind>SIGN</metadata_protection_kind>
-          <data_protection_kind>NONE</data_protection_kind>
-        </topic_rule>
+$(for t in smc_config smc_job smc_operator_command; do rule "$t" true SIGN; done)
         <!-- Telemetry, status, events: access-controlled, not signed (cost). -->
-        <topic_rule>
-          <topic_expression>*</topic_expression>
-          <enable_discovery_protection>false</enable_discovery_protection>
-          <enable_liveliness_protection>false</enable_liveliness_protection>
-          <enable_read_access_control>true</enable_read_access_control>
-          <enable_write_access_control>true</enable_write_access_control>
-          <metadata_protection_kind>NONE</metadata_protection_kind>
-          <data_protection_kind>NONE</data_protection_kind>
-        </topic_rule>
+$(rule '*' false NONE)
       </topic_access_rules>
     </domain_rule>
   </domain_access_rules>
