@@ -86,12 +86,11 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   for (int k = 0; k < n; ++k) {
     if (k != window_) spread = std::max(spread, std::fabs(change_[k] - median));
   }
-  // A window already falling the revolution before (the cutter leaving the
-  // part uncovers one side first) is a trend, not a break: its fall then is
-  // taken off (the second difference across revolutions).
   // In a fast common fall (the cutter leaving the part) the median of the
   // revolution's changes lags: the window just closed is the freshest
-  // measure of it, and the smaller of the two is taken.
+  // measure of it, and the smaller of the two is taken. A window already
+  // falling the revolution before (one side of the cutter leaves first) is a
+  // trend, not a break: that fall is taken off (a second difference).
   const int before = (window_ + n - 1) % n;
   const double common = have_previous_[before] ? std::min(median, change_[before]) : median;
   const double excess = common - change;
@@ -99,18 +98,15 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   const double drop = (excess - trend) / window_mean;
   if (excess - trend < kSpreadFactor * spread) return;
   if (s.tool_broken) return;
-  // A feed that fell through the revolution before this window (the
-  // controller's entry transient) takes the chip from the teeth that cut
-  // least first when the cutter runs out: one window falls as if its tooth
-  // broke, but no window takes its chip. Then a fall is a suspect until
-  // another window has risen by half of it. So is a fall while the cutter
-  // leaves the part (the engagement the drive reports fell since this window
-  // a revolution ago): at a high feed per revolution the part's end takes a
-  // third of one window's arc in one revolution. (A break makes the controller
-  // lower the feed too, but only after it: the revolution before was steady.
-  // Holds do not reach N: it is active only in the cutting step.)
-  // Leaving: below the most the drive has reported since the (re)start (at a
-  // low feed the exit takes hundreds of revolutions). NaN: no.
+  // Suspects. A feed that fell through the revolution before this window
+  // (the controller's entry transient) takes the chip from the teeth that
+  // cut least first when the cutter runs out; the cutter leaving the part
+  // (engagement below the most the drive reported since the (re)start; NaN:
+  // unknown) takes part of one window's arc. Either looks like a break in one
+  // window, but no tooth takes the lost chip: the fall must be confirmed by
+  // another window's rise (above). A break makes the controller lower the
+  // feed only after it, so the revolution before it was steady. Holds do not
+  // reach N: it is active only in the cutting step.
   const bool leaving = s.engagement < most_engaged_ - 1e-9;
   if (feed_before_[window_] < (1.0 - kFeedFall) * feed_before2_[window_] || leaving) {
     if (drop > p_.breakage_threshold && (suspect_window_ < 0 || suspect_window_ == window_)) {

@@ -360,9 +360,10 @@ class ToolBreakageDetector final : public Module {
   Status on_sample(Signals& s) noexcept override;
   Status update(Signals&) noexcept override { return Status::kOk; }
 
-  // For the breakage study: the largest score (the drop beyond the common
-  // change, share of the mean window force) since the last call, whether it
-  // fired or not; each window's change over the last revolution and mean.
+  // For the breakage study: the largest score of an immediate decision (the
+  // drop beyond the common change, share of the mean window force) since the
+  // last call, whether it fired or not (suspects are left out: confirmation
+  // decides them); each window's change over the last revolution and mean.
   double take_largest_score() noexcept {
     const double v = largest_score_;
     largest_score_ = 0;
