@@ -5,7 +5,9 @@
 #include <atomic>
 #include <chrono>
 #include <deque>
+#include <map>
 #include <mutex>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -74,7 +76,6 @@ struct DdsBridge::Impl {
         programs(participant),
         jobs(participant),
         catalogs(participant),
-        commands(command_topic),
         dispatcher(participant),
         next_command_id(unix_now_ns() / 1000) {
     using P = tr::Dispatcher::Priority;
@@ -91,6 +92,13 @@ struct DdsBridge::Impl {
     dispatcher.on_instances(
         statuses,
         [this](const smc_data_EdgeStatus& s, const tr::SampleInfo&) {
+          // The mill's command writer, made when the mill is first seen so
+          // that it has matched the edge before the first command.
+          try {
+            (void)command_writer(wire::get_string(s.machine_id));
+          } catch (const std::invalid_argument& e) {
+            spdlog::warn("dds: {}", e.what());
+          }
           publish(state.on_status(s));
         },
         // The key sample of an edge whose writer is gone.
@@ -175,7 +183,7 @@ struct DdsBridge::Impl {
       cmd.issued_unix_ns = rec.issued_unix_ns;
       cmd.action = static_cast<std::int32_t>(wire_action(rec.request.action));
       try {
-        commands.write(cmd);
+        command_writer(rec.request.machine_id).write(cmd);
         rec.sent = true;
         commands_sent.fetch_add(1, std::memory_order_relaxed);
         spdlog::info("operator command {} sent: {} on {} by operator '{}' from {}", rec.command_id,
@@ -191,6 +199,18 @@ struct DdsBridge::Impl {
       publish(state.on_command(rec));
       if (done) done(rec);
     }
+  }
+
+  // Commands for a mill go into its partition, where its edge reads them
+  // (tr::ParticipantOptions::machine). Throws std::invalid_argument for a
+  // machine id that cannot name a partition.
+  tr::Writer<smc_data_OperatorCommand>& command_writer(const std::string& machine) {
+    auto it = commands.find(machine);
+    if (it == commands.end()) {
+      it = commands.emplace(machine, tr::Writer<smc_data_OperatorCommand>(command_topic, machine))
+               .first;
+    }
+    return it->second;
   }
 
   void fail_pending_commands(const std::string& why) {
@@ -227,7 +247,8 @@ struct DdsBridge::Impl {
   wire::DocumentSubscriber<config::PartProgram> programs;
   wire::DocumentSubscriber<config::JobStatus> jobs;
   wire::DocumentSubscriber<config::CatalogView> catalogs;
-  tr::Writer<smc_data_OperatorCommand> commands;
+  // One per mill, made on first use; only the DDS thread touches it.
+  std::map<std::string, tr::Writer<smc_data_OperatorCommand>> commands;
   tr::Dispatcher dispatcher;
 
   std::thread thread;

@@ -8,7 +8,8 @@
 #       certificate and key, a permissions document (signed) and a Cyclone
 #       DDS profile (loopback, with its Security section)
 #   deploy/security/pki.sh issue DIR NAME ROLE [MACHINE]
-#       one more participant (ROLE: cell, edge, dashboard, observer), or a
+#       one more participant (ROLE: cell, edge, dashboard, observer; an edge
+#       names its MACHINE, the only one whose partition it may use), or a
 #       new certificate for an existing one (rotation: the old one stays
 #       valid until it expires or is revoked)
 #   deploy/security/pki.sh revoke DIR NAME
@@ -100,9 +101,13 @@ topics_xml() {  # topics_xml LIST
   for t in "${list[@]}"; do [[ -n "$t" ]] && echo "            <topic>$t</topic>"; done
 }
 
-permissions() {  # permissions NAME ROLE [NOT_AFTER]
-  local name=$1 role=$2 not_after=${3:-2036-01-01T00:00:00}
-  local g pub sub
+permissions() {  # permissions NAME ROLE MACHINE [NOT_AFTER]
+  local name=$1 role=$2 machine=$3 not_after=${4:-2036-01-01T00:00:00}
+  local g pub sub part='*'
+  # An edge publishes and reads only in its machine's partition,
+  # "<cell partition>/machine/<machine>" (idl/README.md): it cannot act as
+  # another machine. The others: every partition of every cell.
+  [[ "$role" == edge ]] && part="*/machine/$machine"
   g=$(grants "$role")
   pub=${g%% sub:*}; pub=${pub#pub:}
   sub=${g##* sub:}
@@ -118,14 +123,14 @@ permissions() {  # permissions NAME ROLE [NOT_AFTER]
       <allow_rule>
         <domains><id_range><min>0</min><max>230</max></id_range></domains>
 XML
-    # Every partition (a cell's --partition); topics as the role allows.
+    # Topics as the role allows, in the partitions it may use.
     if [[ -n "$pub" ]]; then
       echo "        <publish><topics>"; topics_xml "$pub"
-      echo "        </topics><partitions><partition>*</partition></partitions></publish>"
+      echo "        </topics><partitions><partition>$part</partition></partitions></publish>"
     fi
     if [[ -n "$sub" ]]; then
       echo "        <subscribe><topics>"; topics_xml "$sub"
-      echo "        </topics><partitions><partition>*</partition></partitions></subscribe>"
+      echo "        </topics><partitions><partition>$part</partition></partitions></subscribe>"
     fi
     cat <<XML
       </allow_rule>
@@ -176,9 +181,20 @@ profile() {  # profile NAME
 XML
 }
 
-issue() {  # issue NAME ROLE
-  local name=$1 role=$2 d="$dir/$1"
+issue() {  # issue NAME ROLE [MACHINE]
+  local name=$1 role=$2 machine=${3:-} d="$dir/$1"
   grants "$role" >/dev/null
+  if [[ "$role" == edge ]]; then
+    # The machine id names a DDS partition (smc::transport::machine_partition).
+    if [[ ! "$machine" =~ ^[A-Za-z0-9][A-Za-z0-9._-]{0,30}$ ]]; then
+      echo "pki.sh: issue $name edge: give the edge's MACHINE id (a letter or digit, then" \
+        "up to 30 letters, digits, '-', '_' or '.'), e.g. pki.sh issue DIR edge-mill-3 edge mill-3" >&2
+      exit 2
+    fi
+  elif [[ -n "$machine" ]]; then
+    echo "pki.sh: issue $name $role: only an edge takes a MACHINE" >&2
+    exit 2
+  fi
   mkdir -p "$d"
   openssl ecparam -name prime256v1 -genkey -noout -out "$d/identity.key" 2>/dev/null
   chmod 600 "$d/identity.key"
@@ -187,9 +203,10 @@ issue() {  # issue NAME ROLE
     -CAcreateserial -days "$days" -sha256 -out "$d/identity.pem" 2>/dev/null
   rm -f "$d/identity.csr"
   echo "$role" >"$d/role"
-  permissions "$name" "$role"
+  echo "$machine" >"$d/machine"
+  permissions "$name" "$role" "$machine"
   profile "$name"
-  echo "$name ($role): $d/cyclonedds.xml"
+  echo "$name ($role${machine:+ of $machine}): $d/cyclonedds.xml"
 }
 
 case "$cmd" in
@@ -207,17 +224,18 @@ case "$cmd" in
     governance
     issue cell cell
     IFS=, read -ra ms <<<"$machines"
-    for m in "${ms[@]}"; do issue "edge-$m" edge; done
+    for m in "${ms[@]}"; do issue "edge-$m" edge "$m"; done
     issue dashboard dashboard
     ;;
   issue)
     [[ $# -ge 2 ]] || usage
-    issue "$1" "$2"
+    issue "$1" "$2" "${3:-}"
     ;;
   revoke)
     [[ $# -ge 1 ]] || usage
     [[ -d "$dir/$1" ]] || { echo "pki.sh: no participant '$1' in $dir" >&2; exit 2; }
-    permissions "$1" "$(cat "$dir/$1/role")" 2020-01-02T00:00:00
+    permissions "$1" "$(cat "$dir/$1/role")" "$(cat "$dir/$1/machine" 2>/dev/null || true)" \
+      2020-01-02T00:00:00
     mv "$dir/$1/identity.key" "$dir/$1/identity.key.revoked"
     echo "$1: permissions expired (2020-01-02), key moved aside"
     ;;

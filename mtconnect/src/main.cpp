@@ -18,12 +18,14 @@
 #include <memory>
 #include <set>
 #include <sstream>
+#include <string>
 #include <thread>
 
 #include "smc/common/clock.hpp"
 #include "smc/common/log.hpp"
 #include "smc/mtconnect/shdr_model.hpp"
 #include "smc/transport/dispatcher.hpp"
+#include "smc/transport/endpoint.hpp"
 #include "smc/transport/participant.hpp"
 #include "smc/wire/documents.hpp"
 #include "smc/wire/topics.hpp"
@@ -320,6 +322,9 @@ int main(int argc, char** argv) {
       return 0;
     }
     smc::log::init(log_opts);
+    // A sample a machine's writer sent about another machine (refused).
+    smc::transport::set_refusal_handler(
+        [](const std::string& what) { spdlog::warn("dds: {}", what); });
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     asio::io_context io;

@@ -566,10 +566,10 @@ TEST_F(Cell, InvalidConfigurationIsRejectedAndReported) {
   namespace tr = smc::transport;
   tr::Participant p({.partition = partition_});
   tr::Topic<smc_data_Envelope> topic(p, smc::wire::kConfigTopic);
-  tr::DocumentWriter writer(topic, {"smc.config.SupervisorConfig", 1});
+  tr::DocumentWriter writer(topic, {"smc.config.SupervisorConfig", 1}, /*per_machine=*/true);
   tr::Topic<smc_data_EdgeStatus> status_topic(p);
   tr::Reader<smc_data_EdgeStatus> status(status_topic);
-  ASSERT_TRUE(writer.writer().wait_for_readers(1, 20s));
+  ASSERT_TRUE(writer.writer_for("mill-1").wait_for_readers(1, 20s));
   smc_data_EdgeStatus last_status{};
   auto wait_message = [&](const std::string& needle) -> std::string {
     const auto deadline = Clock::now() + 20s;
@@ -619,7 +619,7 @@ TEST_F(Cell, ACommandWithAnUnknownActionIsRefusedByName) {
   namespace tr = smc::transport;
   tr::Participant p({.partition = partition_});
   tr::Topic<smc_data_OperatorCommand> cmd_topic(p);
-  tr::Writer<smc_data_OperatorCommand> cmd(cmd_topic);
+  tr::Writer<smc_data_OperatorCommand> cmd(cmd_topic, "mill-1");
   tr::Topic<smc_data_EdgeStatus> status_topic(p);
   tr::Reader<smc_data_EdgeStatus> status(status_topic);
   ASSERT_TRUE(cmd.wait_for_readers(1, 20s));
@@ -759,7 +759,7 @@ TEST_F(Cell, AnMTConnectAgentSeesExecutionAndConditionsWithin100Ms) {
   // and releases during the cut.
   smc::transport::Participant p({.partition = partition_});
   smc::transport::Topic<smc_data_OperatorCommand> topic(p);
-  smc::transport::Writer<smc_data_OperatorCommand> commands(topic);
+  smc::transport::Writer<smc_data_OperatorCommand> commands(topic, "mill-1");
   const std::string js = submit("cell/jobs/job_shop.json");
   ASSERT_TRUE(wait_jobs(
       {js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));

@@ -434,7 +434,7 @@ TEST_F(LinuxCncCell, ThePapersJobsRunOnLinuxCncAsOnTheSimulatedMill) {
   namespace tr = smc::transport;
   tr::Participant participant({.partition = partition_});
   tr::Topic<smc_data_OperatorCommand> topic(participant);
-  tr::Writer<smc_data_OperatorCommand> commands(topic);
+  tr::Writer<smc_data_OperatorCommand> commands(topic, "mill-1");
   auto command = [&](int32_t action, uint64_t id) {
     smc_data_OperatorCommand c{};
     smc::wire::set_string(c.machine_id, "mill-1");

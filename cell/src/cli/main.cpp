@@ -1,12 +1,16 @@
 // smc-cell: the cell service of the supervisory machining cell, and its
 // offline tools. Thin: flag parsing only; each subcommand calls a library.
 
+#include <spdlog/spdlog.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
+#include <string>
 
 #include "registry.hpp"
 #include "smc/common/log.hpp"
+#include "smc/transport/endpoint.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -23,7 +27,12 @@ int main(int argc, char** argv) {
   std::stable_sort(reg.begin(), reg.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& [order, r] : reg) r(app);
-  app.parse_complete_callback([&] { smc::log::init(log_opts); });
+  app.parse_complete_callback([&] {
+    smc::log::init(log_opts);
+    // A sample a machine's writer sent about another machine (refused).
+    smc::transport::set_refusal_handler(
+        [](const std::string& what) { spdlog::warn("dds: {}", what); });
+  });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -8,7 +8,9 @@ using namespace std::chrono_literals;
 
 EdgeService::Impl::Impl(ServiceOptions o)
     : opt(std::move(o)),
-      participant({.domain_id = opt.domain_id, .partition = opt.partition}),
+      // The mill's own partition: it publishes and reads nothing else.
+      participant(
+          {.domain_id = opt.domain_id, .partition = opt.partition, .machine = opt.machine_id}),
       config_reader(participant),
       job_reader(participant),
       command_topic(participant),

@@ -30,7 +30,9 @@ void add_run(CLI::App& app) {
   sub->add_option("--machine", opt->machine_id, "Machine id (the cell addresses this edge by it)")
       ->required();
   sub->add_option("--domain", opt->domain_id, "DDS domain id")->capture_default_str();
-  sub->add_option("--partition", opt->partition, "DDS partition (isolates a cell)");
+  sub->add_option("--partition", opt->partition,
+                  "the cell's DDS partition P (isolates a cell); this edge publishes and reads "
+                  "only in P/machine/<--machine>");
   sub->add_option("--lease-ms", *lease_ms, "Liveliness lease of the status topic")
       ->capture_default_str()
       ->check(CLI::Range(100, 600000));

@@ -1,6 +1,8 @@
 // smc-edge: the edge process of one mill, and its offline tools.
 // Thin: flags only; everything else is in the smc_edge library.
 
+#include <spdlog/spdlog.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <string>
@@ -8,6 +10,7 @@
 
 #include "commands.hpp"
 #include "smc/common/log.hpp"
+#include "smc/transport/endpoint.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -26,7 +29,12 @@ int main(int argc, char** argv) {
   smc::edge::cli::add_hal(app);
   smc::edge::cli::add_hal_latency(app);
 #endif
-  app.parse_complete_callback([&] { smc::log::init(log_opts); });
+  app.parse_complete_callback([&] {
+    smc::log::init(log_opts);
+    // A sample a machine's writer sent about another machine (refused).
+    smc::transport::set_refusal_handler(
+        [](const std::string& what) { spdlog::warn("dds: {}", what); });
+  });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "check.hpp"
+#include "smc/transport/participant.hpp"
 #include "smc_data.h"
 
 namespace smc::transport {
@@ -134,15 +135,26 @@ std::optional<EnvelopeRejection> decode_envelope(const smc_data_Envelope& env,
   return std::nullopt;
 }
 
-DocumentWriter::DocumentWriter(Topic<smc_data_Envelope>& topic, Schema schema)
-    : writer_(topic), schema_(std::move(schema)) {}
+DocumentWriter::DocumentWriter(Topic<smc_data_Envelope>& topic, Schema schema, bool per_machine)
+    : topic_(&topic),
+      writer_(topic),
+      per_machine_(per_machine && topic.participant().options().machine.empty()),
+      schema_(std::move(schema)) {}
+
+WriterBase& DocumentWriter::writer_for(const std::string& key) {
+  if (!per_machine_) return writer_;
+  auto it = machines_.find(key);
+  if (it == machines_.end())
+    it = machines_.emplace(key, Writer<smc_data_Envelope>(*topic_, key)).first;
+  return it->second;
+}
 
 void DocumentWriter::publish(std::string_view key, std::string_view document_id,
                              const google::protobuf::MessageLite& msg) {
   smc_data_Envelope env;
   encode_envelope(msg, schema_, key, document_id, ++sequence_, env);
   try {
-    writer_.write(env);
+    writer_for(std::string(key)).write_raw(&env);
   } catch (...) {
     free_envelope(env);
     throw;

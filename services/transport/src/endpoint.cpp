@@ -1,6 +1,9 @@
 #include "smc/transport/endpoint.hpp"
 
 #include <array>
+#include <atomic>
+#include <cstdio>
+#include <cstring>
 #include <thread>
 
 #include "qos_apply.hpp"
@@ -34,7 +37,23 @@ bool poll_until(std::chrono::nanoseconds timeout, F&& get) {
   return true;
 }
 
+void print_refusal(const std::string& what) { std::fprintf(stderr, "%s\n", what.c_str()); }
+
+std::atomic<RefusalHandler> refusal_handler{&print_refusal};
+
 }  // namespace
+
+void set_refusal_handler(RefusalHandler handler) noexcept {
+  refusal_handler.store(handler != nullptr ? handler : &print_refusal);
+}
+
+WriterBase::WriterBase(TopicBase& topic, const QosProfile& qos, const std::string& machine) {
+  detail::Qos q;
+  detail::apply(qos, q.get());
+  entity_ = Entity(detail::check(dds_create_writer(topic.participant().publisher_for(machine),
+                                                   topic.handle(), q.get(), nullptr),
+                                 "dds_create_writer", topic.name() + " for " + machine));
+}
 
 WriterBase::WriterBase(TopicBase& topic, const QosProfile& qos) {
   detail::Qos q;
@@ -71,7 +90,10 @@ bool WriterBase::wait_for_readers(uint32_t n, std::chrono::nanoseconds timeout) 
   return poll_until(timeout, [&] { return publication_matched().current_count >= n; });
 }
 
-ReaderBase::ReaderBase(TopicBase& topic, const QosProfile& qos) {
+ReaderBase::ReaderBase(TopicBase& topic, const QosProfile& qos, MachineOf machine_of)
+    : topic_(topic.name()),
+      cell_(topic.participant().options().partition),
+      machine_of_(machine_of) {
   detail::Qos q;
   detail::apply(qos, q.get());
   entity_ = Entity(detail::check(
@@ -101,6 +123,26 @@ size_t ReaderBase::collect(const RawVisitor& visit, size_t max, bool take) {
         info.instance_state = to_state(infos[i].instance_state);
         info.source_timestamp_ns = infos[i].source_timestamp;
         info.publication_handle = infos[i].publication_handle;
+        if (machine_of_ != nullptr && buf[i] != nullptr) {
+          // A writer no longer matched has an unknown partition: its data
+          // is refused; an instance-state change (no data) passes.
+          const std::string* origin = writer_machine(info.publication_handle);
+          const char* key = machine_of_(buf[i]);
+          const char* about = key != nullptr ? key : "";
+          const bool wrong = origin == nullptr
+                                 ? info.valid_data
+                                 : !origin->empty() && std::strcmp(origin->c_str(), about) != 0;
+          if (wrong) {
+            if (refused_++ == 0 || refused_ % 1000 == 0) {
+              refusal_handler.load()(
+                  "refused on " + topic_ + ": a sample about machine '" + about + "' from " +
+                  (origin == nullptr ? std::string("a writer no longer matched")
+                                     : "a writer in machine '" + *origin + "''s partition") +
+                  " (" + std::to_string(refused_) + " so far)");
+            }
+            continue;
+          }
+        }
         visit(buf[i], info);
       }
     } catch (...) {
@@ -112,6 +154,28 @@ size_t ReaderBase::collect(const RawVisitor& visit, size_t max, bool take) {
     if (count < want || !take) break;  // read() marks samples read; one pass is enough
   }
   return total;
+}
+
+const std::string* ReaderBase::writer_machine(uint64_t publication_handle) {
+  auto it = writers_.find(publication_handle);
+  if (it != writers_.end()) return &it->second;
+  dds_builtintopic_endpoint_t* ep =
+      dds_get_matched_publication_data(entity_.handle(), publication_handle);
+  if (ep == nullptr) return nullptr;  // not matched (any more): not cached
+  std::string machine;
+  uint32_t n = 0;
+  char** names = nullptr;
+  if (ep->qos != nullptr && dds_qget_partition(ep->qos, &n, &names)) {
+    for (uint32_t k = 0; k < n; ++k) {
+      std::string m = machine_of_partition(cell_, names[k]);
+      // In two machines' partitions at once: nobody's.
+      if (!m.empty()) machine = machine.empty() ? m : std::string("?");
+      dds_free(names[k]);
+    }
+    dds_free(names);
+  }
+  dds_builtintopic_free_endpoint(ep);
+  return &writers_.emplace(publication_handle, std::move(machine)).first->second;
 }
 
 size_t ReaderBase::take_raw(const RawVisitor& visit, size_t max) {

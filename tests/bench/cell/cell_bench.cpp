@@ -97,7 +97,7 @@ double deliver(int n, const std::string& partition, bool print) {
   }
   tr::Participant p({.partition = partition});
   tr::Topic<smc_data_Envelope> topic(p, smc::wire::kConfigTopic);
-  tr::DocumentWriter writer(topic, {"smc.config.SupervisorConfig", 1});
+  tr::DocumentWriter writer(topic, {"smc.config.SupervisorConfig", 1}, /*per_machine=*/true);
   tr::Topic<smc_data_EdgeStatus> st_topic(p);
   tr::Reader<smc_data_EdgeStatus> status(st_topic);
   // Every edge up (its status seen) before the clock starts.
@@ -109,7 +109,10 @@ double deliver(int n, const std::string& partition, bool print) {
     });
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  writer.writer().wait_for_readers(static_cast<uint32_t>(n), std::chrono::seconds(30));
+  // Each mill's configuration goes into its own partition, through its own writer.
+  for (int i = 1; i <= n; ++i) {
+    writer.writer_for("mill-" + std::to_string(i)).wait_for_readers(1, std::chrono::seconds(30));
+  }
   auto cfg = smc::documents::load_supervisor_config(src("edge/configs/smc2.textproto"));
   const auto t0 = Clock::now();
   for (int i = 1; i <= n; ++i) {

@@ -75,7 +75,7 @@ Stats run(int commands, bool hostile) {
   smc::wire::DocumentPublisher<cfg::SupervisorConfig> configs(p);
   smc::wire::DocumentPublisher<cfg::JobAssignment> jobs(p);
   tr::Topic<smc_data_OperatorCommand> cmd_topic(p);
-  tr::Writer<smc_data_OperatorCommand> cmd(cmd_topic);
+  tr::Writer<smc_data_OperatorCommand> cmd(cmd_topic, "mill-1");
   tr::Topic<smc_data_SupervisorSituation> sit_topic(p);
   tr::Reader<smc_data_SupervisorSituation> sit(sit_topic);
   tr::Topic<smc_data_EdgeStatus> st_topic(p);
@@ -85,7 +85,7 @@ Stats run(int commands, bool hostile) {
       smc::documents::load_supervisor_config(src("edge/configs/smc1.textproto"));
   good.mutable_machine()->set_machine_id("mill-1");
   good.set_config_id("bench");
-  if (!configs.writer().wait_for_readers(1, 30s) || !cmd.wait_for_readers(1, 30s)) {
+  if (!configs.writer_for("mill-1").wait_for_readers(1, 30s) || !cmd.wait_for_readers(1, 30s)) {
     std::fprintf(stderr, "the edge did not come up\n");
     std::exit(1);
   }

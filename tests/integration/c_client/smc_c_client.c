@@ -5,11 +5,18 @@
  * the mill's feed with an operator command, then releases it.
  *
  *   smc-c-client --machine mill-1 [--partition P] [--operator NAME] [--timeout S]
+ *   smc-c-client --machine mill-1 --posing-from mill-2 [--partition P] [--timeout S]
  *
  * Exit status: 0 when the mill obeyed (module C, the feed hold, active in
  * its situation after the command, and released after the second), 1 when
  * it did not within the timeout, 2 for a usage or DDS error. The DDS
- * profile comes from CYCLONEDDS_URI as for every participant of the cell. */
+ * profile comes from CYCLONEDDS_URI as for every participant of the cell.
+ *
+ * --posing-from M: what an edge of mill M would have to do to speak for
+ * another mill: from M's partition, write a chatter event about --machine
+ * (the cell must refuse it). Exit status 0 when the event was written to a
+ * matched reader, 1 when no reader matched within the timeout, 2 for an
+ * error (e.g. a writer refused by access control). */
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -77,12 +84,52 @@ static int wait_hold(dds_entity_t reader, const char* machine, int want, int64_t
   return 0;
 }
 
+/* From another mill's partition, a chatter event about `machine`. */
+static int pose(dds_entity_t participant, dds_entity_t pub, const char* machine, int64_t deadline) {
+  /* smc_chatter_event: durable record, reliable, transient-local, keep last 1. */
+  dds_entity_t t =
+      dds_create_topic(participant, &smc_data_ChatterEvent_desc, "smc_chatter_event", NULL, NULL);
+  dds_qos_t* q = dds_create_qos();
+  dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+  dds_entity_t w = t < 0 ? t : dds_create_writer(pub, t, q, NULL);
+  dds_delete_qos(q);
+  if (w < 0) {
+    dds_delete(participant);
+    return fail_dds("chatter event writer", w);
+  }
+  dds_publication_matched_status_t m = {0};
+  while (mono_ns() < deadline) {
+    if (dds_get_publication_matched_status(w, &m) == 0 && m.current_count > 0) break;
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  smc_data_ChatterEvent e;
+  memset(&e, 0, sizeof e);
+  snprintf(e.machine_id, sizeof e.machine_id, "%s", machine);
+  e.event_id = (uint64_t)now_ns();
+  e.source = smc_data_CHATTER_OPERATOR;
+  snprintf(e.job_id, sizeof e.job_id, "%s", "posing");
+  const dds_return_t rc = m.current_count > 0 ? dds_write(w, &e) : DDS_RETCODE_OK;
+  printf("chatter event about %s: %s\n", machine,
+         m.current_count == 0 ? "no reader matched"
+         : rc == 0            ? "written"
+                              : dds_strretcode(rc));
+  /* Reliable: give the readers the sample before the participant goes. */
+  if (rc == 0 && m.current_count > 0) dds_wait_for_acks(w, DDS_SECS(2));
+  dds_delete(participant);
+  if (rc != 0) return 2;
+  return m.current_count > 0 ? 0 : 1;
+}
+
 int main(int argc, char** argv) {
-  const char *machine = NULL, *partition = "", *op = "c-client";
+  const char *machine = NULL, *partition = "", *op = "c-client", *posing_from = NULL;
   double timeout_s = 30;
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "--machine") == 0 && i + 1 < argc) {
       machine = argv[++i];
+    } else if (strcmp(argv[i], "--posing-from") == 0 && i + 1 < argc) {
+      posing_from = argv[++i];
     } else if (strcmp(argv[i], "--partition") == 0 && i + 1 < argc) {
       partition = argv[++i];
     } else if (strcmp(argv[i], "--operator") == 0 && i + 1 < argc) {
@@ -90,7 +137,9 @@ int main(int argc, char** argv) {
     } else if (strcmp(argv[i], "--timeout") == 0 && i + 1 < argc) {
       timeout_s = atof(argv[++i]);
     } else {
-      fprintf(stderr, "usage: %s --machine ID [--partition P] [--operator NAME] [--timeout S]\n",
+      fprintf(stderr,
+              "usage: %s --machine ID [--posing-from ID] [--partition P] [--operator NAME] "
+              "[--timeout S]\n",
               argv[0]);
       return 2;
     }
@@ -103,14 +152,19 @@ int main(int argc, char** argv) {
 
   dds_entity_t participant = dds_create_participant(DDS_DOMAIN_DEFAULT, NULL, NULL);
   if (participant < 0) return fail_dds("dds_create_participant", participant);
-  /* The cell's partition (idl/README.md: every participant runs in the
-   * partition given by --partition). */
+  /* The mill's partition, "<cell partition>/machine/<machine>" (idl/README.md:
+   * an edge publishes and reads only there, so a client of one mill joins it). */
+  char mill_partition[256];
+  snprintf(mill_partition, sizeof mill_partition, "%s/machine/%s", partition,
+           posing_from != NULL ? posing_from : machine);
   dds_qos_t* pq = dds_create_qos();
-  if (partition[0] != '\0') dds_qset_partition1(pq, partition);
+  dds_qset_partition1(pq, mill_partition);
   dds_entity_t sub = dds_create_subscriber(participant, pq, NULL);
   dds_entity_t pub = dds_create_publisher(participant, pq, NULL);
   dds_delete_qos(pq);
   if (sub < 0 || pub < 0) return fail_dds("publisher/subscriber", sub < 0 ? sub : pub);
+
+  if (posing_from != NULL) return pose(participant, pub, machine, deadline);
 
   /* smc_force_summary: telemetry, best effort, keep last 8. */
   dds_entity_t t_sum =

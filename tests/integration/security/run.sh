@@ -8,6 +8,10 @@
 #   - with a valid identity whose permissions do not allow operator
 #     commands (an observer): refused when it creates its writer;
 #   - with the dashboard's identity: obeyed, right after the refusals.
+# And mill-2's edge certificate tries to act as mill-1: an edge started as
+# mill-1 on it is refused at start; its chatter-event writer in mill-1's
+# partition is refused; a chatter event about mill-1 written from its own
+# partition is dropped by the cell, which logs the refusal.
 # Usage: run.sh BIN_DIR SOURCE_DIR
 set -euo pipefail
 bin=$1
@@ -22,7 +26,7 @@ cleanup() {
 trap cleanup EXIT
 fail() { echo "FAIL: $*" >&2; for f in "$work"/*.log; do echo "--- $f" >&2; tail -5 "$f" >&2; done; exit 1; }
 
-"$src/deploy/security/pki.sh" init "$work/pki" --machines mill-1 >/dev/null
+"$src/deploy/security/pki.sh" init "$work/pki" --machines mill-1,mill-2 >/dev/null
 "$src/deploy/security/pki.sh" issue "$work/pki" observer observer >/dev/null
 "$src/deploy/security/pki.sh" init "$work/rogue" --machines mill-1 >/dev/null  # another CA
 partition="security-$$"
@@ -47,10 +51,11 @@ done
 [[ "$(state)" == running ]] || fail "the job did not start under DDS Security (state $(state))"
 echo "ok: the job runs with every participant authenticated and access-controlled"
 
-client() {  # client PROFILE_URI LOG -> exit status of smc-c-client
-  local rc=0
-  CYCLONEDDS_URI=$1 "$bin/smc-c-client" --machine mill-1 --partition "$partition" \
-    --operator intruder --timeout "${2:-4}" >"$work/$3.log" 2>&1 || rc=$?
+client() {  # client PROFILE_URI TIMEOUT LOG [ARGS...] -> exit status of smc-c-client
+  local rc=0 uri=$1 timeout=$2 log=$3
+  shift 3
+  CYCLONEDDS_URI=$uri "$bin/smc-c-client" --machine mill-1 --partition "$partition" \
+    --operator intruder --timeout "$timeout" "$@" >"$work/$log.log" 2>&1 || rc=$?
   echo "$rc"
 }
 
@@ -68,6 +73,31 @@ rc=$(client "$(profile observer)" 4 observer)
 grep -q "writer" "$work/observer.log" || fail "the observer's refusal is not reported"
 echo "ok: a valid identity without the right to command: its writer refused ($(head -1 "$work/observer.log"))"
 
+# mill-2's edge certificate, acting as mill-1.
+rc=0
+CYCLONEDDS_URI=$(profile edge-mill-2) timeout 30 "$bin/smc-edge" run --machine mill-1 \
+  --partition "$partition" --paced --no-realtime \
+  --mill-model "$src/cell/models/paper_face_mill.textproto" >"$work/edge-posing.log" 2>&1 || rc=$?
+[[ $rc != 0 && $rc != 124 ]] || fail "an edge on mill-2's certificate ran as mill-1 (exit $rc)"
+grep -qi "not allowed by security" "$work/edge-posing.log" ||
+  fail "the edge on mill-2's certificate did not say why it stopped"
+echo "ok: an edge on mill-2's certificate cannot run as mill-1 ($(grep -m1 -i 'not allowed by security' "$work/edge-posing.log" | cut -c1-200))"
+
+rc=$(client "$(profile edge-mill-2)" 4 posing-in-mill-1 --posing-from mill-1)
+[[ $rc == 2 ]] || fail "mill-2's certificate in mill-1's partition: smc-c-client exited $rc (2: writer refused)"
+echo "ok: mill-2's certificate cannot write into mill-1's partition ($(head -1 "$work/posing-in-mill-1.log"))"
+
+rc=$(client "$(profile edge-mill-2)" 10 posing-from-mill-2 --posing-from mill-2)
+[[ $rc == 0 ]] || fail "mill-2's certificate in its own partition: smc-c-client exited $rc (0: written)"
+for _ in $(seq 1 50); do
+  grep -q "refused on smc_chatter_event: a sample about machine 'mill-1' from a writer in machine 'mill-2''s partition" \
+    "$work/cell.log" && break
+  sleep 0.2
+done
+grep -q "refused on smc_chatter_event: a sample about machine 'mill-1'" "$work/cell.log" ||
+  fail "the cell did not report the chatter event mill-2's certificate wrote about mill-1"
+echo "ok: a chatter event about mill-1 from mill-2's partition is dropped: $(grep -m1 -o 'refused on smc_chatter_event.*' "$work/cell.log")"
+
 rc=$(client "$(profile dashboard)" 20 dashboard)
 [[ $rc == 0 ]] || fail "the dashboard's identity: smc-c-client exited $rc (0: the mill obeyed)"
 echo "ok: the dashboard's identity holds and releases the feed right after"
@@ -77,4 +107,4 @@ for _ in $(seq 1 600); do
   sleep 0.2
 done
 [[ "$(state)" == done ]] || fail "the job did not finish (state $(state))"
-echo "PASS: DDS Security: the job completed; 3 intruders refused, the operator obeyed"
+echo "PASS: DDS Security: the job completed; 3 intruders and mill-2's edge acting as mill-1 refused, the operator obeyed"

@@ -148,7 +148,7 @@ TEST(WireDocuments, SchemaFromTheDescriptorAndARoundTrip) {
   Participant p({.partition = smc::test::unique_partition("disp-doc")});
   smc::wire::DocumentPublisher<smc::config::JobAssignment> out(p);
   smc::wire::DocumentSubscriber<smc::config::JobAssignment> in(p);
-  ASSERT_TRUE(out.writer().wait_for_readers(1, 5s));
+  ASSERT_TRUE(out.writer_for("mill-1").wait_for_readers(1, 5s));
   Dispatcher d(p);
   std::optional<smc::config::JobAssignment> got;
   d.on(in.reader(), [&] {

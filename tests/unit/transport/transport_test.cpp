@@ -10,8 +10,10 @@
 #include <cstring>
 #include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "child_process.hpp"
 #include "smc/transport/document.hpp"
@@ -428,6 +430,107 @@ TEST_F(BadEnvelope, GarbageWithValidChecksumIsUnparsable) {
         e.crc32 = crc32_of(e.payload._buffer, e.payload._length);
       },
       "could not parse");
+}
+
+// ---- per-machine partitions: a machine's participant speaks only for itself ----
+
+TEST(MachinePartitions, NamesAreCheckedAndReadBack) {
+  EXPECT_EQ(machine_partition("cell-a", "mill-1"), "cell-a/machine/mill-1");
+  EXPECT_EQ(machine_partition("", "mill_1.b"), "/machine/mill_1.b");
+  EXPECT_EQ(machine_of_partition("cell-a", "cell-a/machine/mill-1"), "mill-1");
+  EXPECT_EQ(machine_of_partition("cell-a", "cell-b/machine/mill-1"), "");
+  EXPECT_EQ(machine_of_partition("cell-a", "cell-a"), "");
+  EXPECT_EQ(machine_of_partition("cell-a", "cell-a/machine/*"), "") << "a pattern is nobody's";
+  for (const char* bad : {"", "-mill", "mill/2", "mill*", "mill 1", "mill\\1"}) {
+    EXPECT_THROW(machine_partition("cell-a", bad), std::invalid_argument) << bad;
+  }
+  Participant mill1({.partition = smc::test::unique_partition("own"), .machine = "mill-1"});
+  EXPECT_EQ(mill1.publisher_for("mill-1"), mill1.publisher());
+  EXPECT_THROW(mill1.publisher_for("mill-2"), std::invalid_argument);
+}
+
+namespace {
+std::vector<std::string> refusals;  // what the refusal handler was told
+void record_refusal(const std::string& what) { refusals.push_back(what); }
+}  // namespace
+
+TEST(MachinePartitions, AMachinesWriterPosingAsAnotherMachineIsRefusedAndReported) {
+  const std::string partition = smc::test::unique_partition("posing");
+  Participant cell({.partition = partition});
+  Participant mill1({.partition = partition, .machine = "mill-1"});
+  Topic<smc_data_SupervisorSituation> cell_topic(cell);
+  Topic<smc_data_SupervisorSituation> mill_topic(mill1);
+  Reader<smc_data_SupervisorSituation> reader(cell_topic);
+  Writer<smc_data_SupervisorSituation> writer(mill_topic);
+  ASSERT_TRUE(writer.wait_for_readers(1, 10s));
+  refusals.clear();
+  set_refusal_handler(&record_refusal);
+  smc_data_SupervisorSituation s{};
+  set_string(s.machine_id, "mill-2");  // mill-1's edge, posing as mill-2
+  writer.write(s);
+  set_string(s.machine_id, "mill-1");  // and speaking for itself, after
+  writer.write(s);
+  // Reliable and in order from one writer: once mill-1's sample is in, the
+  // one before it has been taken too.
+  std::vector<std::string> seen;
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (seen.empty() && std::chrono::steady_clock::now() < deadline) {
+    reader.take([&](const smc_data_SupervisorSituation& x, const SampleInfo& i) {
+      if (i.valid_data) seen.push_back(get_string(x.machine_id));
+    });
+    std::this_thread::sleep_for(2ms);
+  }
+  set_refusal_handler(nullptr);
+  EXPECT_EQ(seen, std::vector<std::string>{"mill-1"});
+  EXPECT_EQ(reader.refused(), 1u);
+  ASSERT_EQ(refusals.size(), 1u);
+  EXPECT_NE(refusals[0].find("smc_supervisor_situation"), std::string::npos) << refusals[0];
+  EXPECT_NE(refusals[0].find("about machine 'mill-2'"), std::string::npos) << refusals[0];
+  EXPECT_NE(refusals[0].find("machine 'mill-1''s partition"), std::string::npos) << refusals[0];
+}
+
+TEST(MachinePartitions, TheCellWritesIntoEachMachinesPartitionAndAMachineReadsOnlyItsOwn) {
+  const std::string partition = smc::test::unique_partition("per-machine");
+  Participant cell({.partition = partition});
+  Participant mill1({.partition = partition, .machine = "mill-1"});
+  Topic<smc_data_OperatorCommand> cell_topic(cell);
+  Topic<smc_data_OperatorCommand> mill_topic(mill1);
+  Reader<smc_data_OperatorCommand> at_mill1(mill_topic);
+  Reader<smc_data_OperatorCommand> at_cell(cell_topic);  // every partition of the cell
+  Writer<smc_data_OperatorCommand> in_cell(cell_topic);  // the cell's own partition
+  Writer<smc_data_OperatorCommand> to_mill2(cell_topic, "mill-2");
+  Writer<smc_data_OperatorCommand> to_mill1(cell_topic, "mill-1");
+  ASSERT_TRUE(to_mill1.wait_for_readers(2, 10s));
+  ASSERT_TRUE(to_mill2.wait_for_readers(1, 10s));
+  ASSERT_TRUE(in_cell.wait_for_readers(1, 10s));
+  smc_data_OperatorCommand c{};
+  set_string(c.machine_id, "mill-1");
+  c.command_id = 1;
+  in_cell.write(c);  // a cell-partition writer: no edge reads it
+  set_string(c.machine_id, "mill-2");
+  c.command_id = 2;
+  to_mill2.write(c);
+  set_string(c.machine_id, "mill-1");
+  c.command_id = 3;
+  to_mill1.write(c);
+  std::vector<uint64_t> mill_got, cell_got;
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while ((mill_got.empty() || cell_got.size() < 3) && std::chrono::steady_clock::now() < deadline) {
+    at_mill1.take([&](const smc_data_OperatorCommand& x, const SampleInfo& i) {
+      if (i.valid_data) mill_got.push_back(x.command_id);
+    });
+    at_cell.take([&](const smc_data_OperatorCommand& x, const SampleInfo& i) {
+      if (i.valid_data) cell_got.push_back(x.command_id);
+    });
+    std::this_thread::sleep_for(2ms);
+  }
+  std::sort(cell_got.begin(), cell_got.end());
+  EXPECT_EQ(cell_got, (std::vector<uint64_t>{1, 2, 3}));
+  EXPECT_EQ(mill_got, std::vector<uint64_t>{3});
+  EXPECT_EQ(to_mill2.publication_matched().current_count, 1u) << "only the cell's reader";
+  EXPECT_EQ(in_cell.publication_matched().current_count, 1u) << "only the cell's reader";
+  EXPECT_EQ(at_mill1.refused(), 0u);
+  EXPECT_EQ(at_cell.refused(), 0u);
 }
 
 // ---- the error path names the failing call ----

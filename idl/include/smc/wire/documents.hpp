@@ -25,22 +25,27 @@ struct DocumentTopic;
 template <>
 struct DocumentTopic<smc::config::SupervisorConfig> {
   static constexpr const char* kName = kConfigTopic;  // key: machine id
+  static constexpr bool kPerMachine = true;
 };
 template <>
 struct DocumentTopic<smc::config::JobAssignment> {
   static constexpr const char* kName = kJobTopic;  // key: machine id
+  static constexpr bool kPerMachine = true;
 };
 template <>
 struct DocumentTopic<smc::config::JobStatus> {
   static constexpr const char* kName = kJobStatusTopic;  // key: job id
+  static constexpr bool kPerMachine = false;
 };
 template <>
 struct DocumentTopic<smc::config::PartProgram> {
   static constexpr const char* kName = kProgramTopic;  // key: machine id
+  static constexpr bool kPerMachine = true;
 };
 template <>
 struct DocumentTopic<smc::config::CatalogView> {
   static constexpr const char* kName = kCatalogTopic;  // key: "cell"
+  static constexpr bool kPerMachine = false;
 };
 
 // The schema a document of type M is sent and checked with.
@@ -61,11 +66,15 @@ template <class M>
 class DocumentPublisher : private detail::EnvelopeTopic {
  public:
   explicit DocumentPublisher(transport::Participant& p)
-      : detail::EnvelopeTopic(p, DocumentTopic<M>::kName), writer_(topic, schema<M>()) {}
+      : detail::EnvelopeTopic(p, DocumentTopic<M>::kName),
+        writer_(topic, schema<M>(), DocumentTopic<M>::kPerMachine) {}
   void publish(std::string_view key, std::string_view document_id, const M& doc) {
     writer_.publish(key, document_id, doc);
   }
   transport::WriterBase& writer() noexcept { return writer_.writer(); }
+  // The writer of the documents with this key (its machine's, for documents
+  // keyed by machine).
+  transport::WriterBase& writer_for(const std::string& key) { return writer_.writer_for(key); }
 
  private:
   transport::DocumentWriter writer_;

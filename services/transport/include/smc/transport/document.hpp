@@ -62,15 +62,23 @@ std::optional<EnvelopeRejection> decode_envelope(const smc_data_Envelope& env,
                                                  google::protobuf::MessageLite& out);
 
 // Publishes documents of one schema on one topic, keyed (machine id or job id).
+// `per_machine` (documents keyed by machine, from a participant of the
+// cell): each document goes into its machine's partition, through a writer
+// made for that machine on first use (see ParticipantOptions::machine).
 class DocumentWriter {
  public:
-  DocumentWriter(Topic<smc_data_Envelope>& topic, Schema schema);
+  DocumentWriter(Topic<smc_data_Envelope>& topic, Schema schema, bool per_machine = false);
   void publish(std::string_view key, std::string_view document_id,
                const google::protobuf::MessageLite& msg);
+  // The writer a document with this key goes through.
+  WriterBase& writer_for(const std::string& key);
   WriterBase& writer() noexcept { return writer_; }
 
  private:
+  Topic<smc_data_Envelope>* topic_;
   Writer<smc_data_Envelope> writer_;
+  bool per_machine_;
+  std::map<std::string, Writer<smc_data_Envelope>> machines_;
   Schema schema_;
   uint64_t sequence_ = 0;
 };

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "smc/transport/entity.hpp"
@@ -36,6 +38,8 @@ struct LivelinessStatus {
 class WriterBase {
  public:
   WriterBase(TopicBase& topic, const QosProfile& qos);
+  // A writer into machine `machine`'s partition (Participant::publisher_for).
+  WriterBase(TopicBase& topic, const QosProfile& qos, const std::string& machine);
   EntityHandle handle() const noexcept { return entity_.handle(); }
   void write_raw(const void* sample);
   void dispose_raw(const void* sample);
@@ -54,15 +58,26 @@ class Writer : public WriterBase {
  public:
   explicit Writer(Topic<T>& topic) : WriterBase(topic, topic.qos()) {}
   Writer(Topic<T>& topic, const QosProfile& qos) : WriterBase(topic, qos) {}
+  Writer(Topic<T>& topic, const std::string& machine) : WriterBase(topic, topic.qos(), machine) {}
   void write(const T& sample) { write_raw(&sample); }
   void dispose(const T& key) { dispose_raw(&key); }
   void unregister(const T& key) { unregister_raw(&key); }
 };
 
+// What a reader does with a sample that a writer in one machine's partition
+// wrote about another machine (see ReaderBase): `what` names the topic, the
+// writer's machine and the sample's. The default writes a line to stderr.
+// Any thread; set it once at start-up.
+using RefusalHandler = void (*)(const std::string& what);
+void set_refusal_handler(RefusalHandler handler) noexcept;
+
 class ReaderBase {
  public:
   using RawVisitor = std::function<void(const void* sample, const SampleInfo& info)>;
-  ReaderBase(TopicBase& topic, const QosProfile& qos);
+  // The machine a sample is about (its key), for the origin check; null: the
+  // type is not keyed by machine.
+  using MachineOf = const char* (*)(const void* sample);
+  ReaderBase(TopicBase& topic, const QosProfile& qos, MachineOf machine_of = nullptr);
   EntityHandle handle() const noexcept { return entity_.handle(); }
   // Takes up to `max` samples (loaned, no copy) and visits each; returns the
   // number taken. The sample pointer is valid only during the visit.
@@ -72,17 +87,50 @@ class ReaderBase {
   MatchStatus subscription_matched() const;
   LivelinessStatus liveliness() const;
   bool wait_for_writers(uint32_t n, std::chrono::nanoseconds timeout) const;
+  // Samples dropped by the origin check: a writer in machine X's partition
+  // (which DDS Security grants to X's certificate alone) wrote about machine
+  // Y. Writers in the cell's partition are not checked.
+  uint64_t refused() const noexcept { return refused_; }
 
  private:
   size_t collect(const RawVisitor& visit, size_t max, bool take);
+  // The machine whose partition a matched writer publishes in ("" for the
+  // cell's partition; null for a writer not matched); looked up once per
+  // writer.
+  const std::string* writer_machine(uint64_t publication_handle);
   Entity entity_;
+  std::string topic_, cell_;
+  MachineOf machine_of_ = nullptr;
+  std::unordered_map<uint64_t, std::string> writers_;
+  uint64_t refused_ = 0;
 };
+
+namespace detail {
+template <class T>
+const char* machine_key(const void* sample) {
+  if constexpr (requires(const T& t) { t.machine_id; }) {
+    return static_cast<const T*>(sample)->machine_id;
+  } else {
+    return static_cast<const T*>(sample)->key;
+  }
+}
+template <class T>
+constexpr ReaderBase::MachineOf machine_of() {
+  if constexpr (
+      requires(const T& t) { t.machine_id; } || requires(const T& t) { t.key; }) {
+    return &machine_key<T>;
+  } else {
+    return nullptr;
+  }
+}
+}  // namespace detail
 
 template <class T>
 class Reader : public ReaderBase {
  public:
-  explicit Reader(Topic<T>& topic) : ReaderBase(topic, topic.qos()) {}
-  Reader(Topic<T>& topic, const QosProfile& qos) : ReaderBase(topic, qos) {}
+  explicit Reader(Topic<T>& topic) : ReaderBase(topic, topic.qos(), detail::machine_of<T>()) {}
+  Reader(Topic<T>& topic, const QosProfile& qos)
+      : ReaderBase(topic, qos, detail::machine_of<T>()) {}
 
   // visit(const T&, const SampleInfo&) for every sample taken, valid or not.
   template <class F>
