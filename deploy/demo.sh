@@ -4,15 +4,17 @@
 # and one job-shop job (SMC II) and prints a live summary until both finish.
 # This is the README's demo command; it installs what it needs first.
 #
-#   deploy/demo.sh [--speedup N] [--keep] [--linuxcnc] [--secure]
+#   deploy/demo.sh [--speedup N] [--keep] [--linuxcnc] [--insecure]
 #     --speedup N  machine seconds per wall second for the simulated mills (default 2)
 #     --keep       leave the cell running after the jobs finish (Ctrl-C ends it)
 #     --linuxcnc   mill-1 is a headless LinuxCNC (deploy/linuxcnc/) whose own
 #                  motion cuts the paper's part through the virtual
 #                  dynamometer, in real time; mill-2 stays simulated
-#     --secure     DDS Security: a fresh PKI (deploy/security/pki.sh) and each
-#                  process on its own identity and permissions (not with
-#                  --linuxcnc yet); without it, DDS is unauthenticated
+#     --insecure   plain DDS: no authentication, access control or signing
+#                  (a quick local run). By default the demo runs under DDS
+#                  Security: a fresh PKI (deploy/security/pki.sh) and each
+#                  process on its own identity and permissions, each mill's
+#                  edge confined to its own partition
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -20,21 +22,18 @@ root=$PWD
 speedup=2
 keep=0
 linuxcnc=0
-secure=0
+secure=1
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --speedup) speedup="$2"; shift 2 ;;
     --keep) keep=1; shift ;;
     --linuxcnc) linuxcnc=1; shift ;;
-    --secure) secure=1; shift ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    --insecure) secure=0; shift ;;
+    --secure) secure=1; shift ;;  # the default; kept for older scripts
+    -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) echo "demo: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
-if [[ $secure -eq 1 && $linuxcnc -eq 1 ]]; then
-  echo "demo: --secure with --linuxcnc is not supported yet (LinuxCNC's user reads no keys)" >&2
-  exit 2
-fi
 
 deploy/setup.sh
 echo "== building (ci preset: the same build tree and flags as deploy/test.sh)"
@@ -56,11 +55,12 @@ cleanup() {
 }
 trap cleanup EXIT INT TERM
 
-# The DDS profile of a process: the loopback one, or with --secure its own
-# identity's (each participant authenticated, its topics as its role allows).
+# The DDS profile of a process: its own identity's (each participant
+# authenticated, its topics as its role allows), or with --insecure the
+# loopback one.
 uri() { [[ $secure -eq 1 ]] && echo "file://$run/pki/$1/cyclonedds.xml" || echo "$CYCLONEDDS_URI"; }
 if [[ $secure -eq 1 ]]; then
-  echo "== DDS Security: a PKI in $run/pki (deploy/security/README.md)"
+  echo "== DDS Security: a PKI in $run/pki (deploy/security/README.md; --insecure: without)"
   deploy/security/pki.sh init "$run/pki" --machines mill-1,mill-2 | sed 's/^/   /'
   deploy/security/pki.sh issue "$run/pki" mtconnect observer | sed 's/^/   /'
 fi
@@ -85,7 +85,9 @@ if [[ $linuxcnc -eq 1 ]]; then
   chmod 755 "$run"
   deploy/linuxcnc/run.sh start --dir "$run/linuxcnc" --dyno "$root/edge/configs/smc2.textproto"
   mkdir -p "$run/programs" && chmod 777 "$run/programs"
-  deploy/linuxcnc/run.sh exec env CYCLONEDDS_URI="$CYCLONEDDS_URI" "$bin/smc-edge" run \
+  # LinuxCNC's user runs mill-1's edge: it owns mill-1's identity (key 600).
+  [[ $secure -eq 0 ]] || chown -R "${SMC_CNC_USER:-smc-cnc}" "$run/pki/edge-mill-1"
+  deploy/linuxcnc/run.sh exec env CYCLONEDDS_URI="$(uri edge-mill-1)" "$bin/smc-edge" run \
     --machine mill-1 --drive linuxcnc --partition "$partition" --no-realtime \
     --program-dir "$run/programs" >"$run/mill-1.log" 2>&1 &
   pids+=($!)
@@ -99,7 +101,8 @@ for m in "${mills[@]}"; do
 done
 if [[ -x "$bin/smc-dashboard" ]]; then
   token=$(head -c 24 /dev/urandom | od -An -tx1 | tr -d ' \n')
-  ( umask 077; echo "operator $token" >"$run/tokens" )
+  # The token file holds the token's SHA-256, not the token.
+  ( umask 077; echo "$token" | "$bin/smc-dashboard" --hash-token operator >"$run/tokens" )
   CYCLONEDDS_URI=$(uri dashboard) "$bin/smc-dashboard" --http 127.0.0.1:8080 \
     --partition "$partition" --token-file "$run/tokens" --cell-db "$run/cell.db" \
     >"$run/dashboard.log" 2>&1 &

@@ -21,6 +21,8 @@ packages=(
   rt-tests
   # dashboard: Boost.Beast (headers), the page's npm packages, the browser test
   libboost-dev ca-certificates chromium
+  # OpenSSL: the dashboard's token hashes (libcrypto); the DDS Security PKI (deploy/security)
+  libssl-dev openssl
   # LinuxCNC 2.9 (uspace): rs274 checks the G-code; the real-CNC drive and
   # its headless machine (deploy/linuxcnc/). Recommends are not installed
   # (they pull a realtime kernel, PyQt and OpenCV).

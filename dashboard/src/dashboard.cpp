@@ -160,4 +160,8 @@ int run(const Options& options) {
   return 0;
 }
 
+std::string hash_token_line(std::string_view name, std::string_view token) {
+  return Auth::hash_line(name, token);
+}
+
 }  // namespace smc::dashboard

@@ -2,12 +2,17 @@
 // browser, with operator commands. Thin: flags only; the rest is the
 // smc_dashboard library.
 
+#include <spdlog/spdlog.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
+#include <iostream>
+#include <string>
 
 #include "smc/common/log.hpp"
 #include "smc/dashboard/dashboard.hpp"
+#include "smc/transport/endpoint.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -27,8 +32,13 @@ int main(int argc, char** argv) {
                  "The cell's SQLite database (smc-cell serve --db), read on each job history "
                  "page and CSV export (opened on the first; it may not exist yet at start)");
   app.add_option("--token-file", o.token_file,
-                 "operator tokens, one 'NAME TOKEN' per line (without it: read-only)")
+                 "operator tokens, one 'NAME sha256:HEX' line each (--hash-token writes one; "
+                 "without the file: read-only)")
       ->check(CLI::ExistingFile);
+  std::string hash_for;
+  app.add_option("--hash-token", hash_for,
+                 "read a token from stdin and print NAME's line for --token-file, then exit")
+      ->option_text("NAME");
   app.add_option("--web-root", o.web_root,
                  "serve the page from this folder instead of the embedded copy")
       ->check(CLI::ExistingDirectory);
@@ -47,7 +57,16 @@ int main(int argc, char** argv) {
   app.add_option("--log-format", log_opts.format, "spdlog pattern, or 'json'");
   try {
     app.parse(argc, argv);
+    if (!hash_for.empty()) {
+      std::string token;
+      std::getline(std::cin, token);
+      std::printf("%s\n", smc::dashboard::hash_token_line(hash_for, token).c_str());
+      return 0;
+    }
     smc::log::init(log_opts);
+    // A sample a machine's writer sent about another machine (refused).
+    smc::transport::set_refusal_handler(
+        [](const std::string& what) { spdlog::warn("dds: {}", what); });
     o.stall_timeout = std::chrono::milliseconds(stall_ms);
     const int rc = smc::dashboard::run(o);
     smc::log::shutdown();

@@ -18,12 +18,13 @@ build_packages=(
   cyclonedds-dev cyclonedds-tools
   libeigen3-dev libprotobuf-dev protobuf-compiler libspdlog-dev libsqlite3-dev
   zlib1g-dev libcli11-dev
-  # dashboard: Boost.Beast (headers), npm for the page's one dependency
-  libboost-dev nodejs npm
+  # dashboard: Boost.Beast (headers), npm for the page's one dependency,
+  # libcrypto for its token hashes
+  libboost-dev nodejs npm libssl-dev
 )
 # What smc-cell, smc-edge and smc-dashboard load (ldd), nothing else.
 runtime_packages=(
-  libddsc0debian libprotobuf32 libspdlog1.10 libfmt9 libsqlite3-0 zlib1g libstdc++6
+  libddsc0debian libprotobuf32 libspdlog1.10 libfmt9 libsqlite3-0 zlib1g libstdc++6 libssl3
 )
 
 usage() {

@@ -131,8 +131,9 @@ class DashboardFixture {
                      ("smc-dashboard-tokens-" + std::to_string(::getpid()) + "-" +
                       std::to_string(std::chrono::steady_clock::now().time_since_epoch().count())))
                         .string();
-      std::ofstream(token_file_) << "# test operators\nalice " << kAliceToken << "\nbob "
-                                 << kBobToken << "\n";
+      std::ofstream(token_file_) << "# test operators (their tokens' SHA-256)\n"
+                                 << dashboard::hash_token_line("alice", kAliceToken) << "\n"
+                                 << dashboard::hash_token_line("bob", kBobToken) << "\n";
       std::filesystem::permissions(
           token_file_, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
       o.token_file = token_file_;

@@ -6,7 +6,9 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "auth.hpp"
 #include "cell_state.hpp"
@@ -61,6 +63,49 @@ TEST(Auth, ReportsEveryBadLineWithItsPlace) {
               std::string::npos)
         << what;
     EXPECT_NE(what.find("tokens.txt:5: operator name 'bad/name'"), std::string::npos) << what;
+  }
+}
+
+// The file holds SHA-256 hashes (the values here from sha256sum, not from
+// the code under test); a token in clear still works, and is named.
+TEST(Auth, StoresTokensAsTheirSha256AndNamesTheOnesInClear) {
+  EXPECT_EQ(Auth::hash_line("alice", "0123456789abcdefXYZ"),
+            "alice sha256:b19dd0d3436da6a4171b05d7ad2f0c8a52e88e21834b66c2ce9ad3df58c46eea");
+  const Auth a = Auth::parse(
+      "alice sha256:b19dd0d3436da6a4171b05d7ad2f0c8a52e88e21834b66c2ce9ad3df58c46eea\n"
+      "bob SHA256:3465F6E6975BAA864CA957F0914ECDA9BF7EB601AC31AC20A5DC3D329279A843\n"
+      "carol carol-in-clear-0123456789\n",
+      "tokens.txt");
+  EXPECT_EQ(a.size(), 3u);
+  EXPECT_EQ(a.authenticate("Bearer 0123456789abcdefXYZ").value_or(""), "alice");
+  EXPECT_EQ(a.authenticate("Bearer carol-in-clear-0123456789").value_or(""), "carol");
+  EXPECT_EQ(a.in_clear(), std::vector<std::string>{"carol"});
+  // The hash itself is not a token.
+  EXPECT_FALSE(a.authenticate(
+      "Bearer sha256:b19dd0d3436da6a4171b05d7ad2f0c8a52e88e21834b66c2ce9ad3df58c46eea"));
+  EXPECT_EQ(a.authenticate("Bearer fedcba9876543210").value_or(""), "bob");  // upper case hex
+  EXPECT_THROW(Auth::hash_line("bad/name", "0123456789abcdefXYZ"), std::invalid_argument);
+  EXPECT_THROW(Auth::hash_line("alice", "short"), std::invalid_argument);
+}
+
+TEST(Auth, ABadHashOrAHashOfAnotherOperatorsTokenIsAnErrorNamingItsLine) {
+  try {
+    Auth::parse(
+        "alice sha256:b19dd0d3436da6a4171b05d7ad2f0c8a52e88e21834b66c2ce9ad3df58c46ee\n"
+        "bob sha256:zz9dd0d3436da6a4171b05d7ad2f0c8a52e88e21834b66c2ce9ad3df58c46eea\n"
+        "carol 0123456789abcdefXYZ\n"
+        "dave sha256:b19dd0d3436da6a4171b05d7ad2f0c8a52e88e21834b66c2ce9ad3df58c46eea\n",
+        "tokens.txt");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("tokens.txt:1: token hash of 'alice' must be 'sha256:' and 64 hex"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("tokens.txt:2: token hash of 'bob'"), std::string::npos) << what;
+    EXPECT_NE(what.find("tokens.txt:4: token of 'dave' is also the token of 'carol'"),
+              std::string::npos)
+        << what;
   }
 }
 

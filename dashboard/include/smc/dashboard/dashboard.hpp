@@ -66,4 +66,9 @@ class Dashboard {
 // SIGINT or SIGTERM, stop(). Returns the process exit code.
 int run(const Options& options);
 
+// The --token-file line of operator `name` with this token: "NAME
+// sha256:HEX" (the file holds the token's SHA-256, never the token).
+// Throws std::invalid_argument naming what is wrong with either.
+std::string hash_token_line(std::string_view name, std::string_view token);
+
 }  // namespace smc::dashboard
