@@ -103,12 +103,24 @@ if [[ -x "$bin/smc-dashboard" ]]; then
   token=$(head -c 24 /dev/urandom | od -An -tx1 | tr -d ' \n')
   # The token file holds the token's SHA-256, not the token.
   ( umask 077; echo "$token" | "$bin/smc-dashboard" --hash-token operator >"$run/tokens" )
-  CYCLONEDDS_URI=$(uri dashboard) "$bin/smc-dashboard" --http 127.0.0.1:8080 \
+  # Secure: HTTPS with a certificate from the PKI's web CA.
+  web=(--http 127.0.0.1:8080)
+  scheme=http
+  if [[ $secure -eq 1 ]]; then
+    deploy/security/pki.sh https "$run/pki" dashboard 127.0.0.1 localhost >/dev/null
+    web+=(--tls-cert "$run/pki/dashboard/https.pem" --tls-key "$run/pki/dashboard/https.key")
+    scheme=https
+  fi
+  CYCLONEDDS_URI=$(uri dashboard) "$bin/smc-dashboard" "${web[@]}" \
     --partition "$partition" --token-file "$run/tokens" --cell-db "$run/cell.db" \
     >"$run/dashboard.log" 2>&1 &
   pids+=($!)
-  echo "== dashboard:     http://127.0.0.1:8080/"
-  echo "   operator link: http://127.0.0.1:8080/#token=$token   (feed hold, release, chatter signal)"
+  echo "== dashboard:     $scheme://127.0.0.1:8080/"
+  echo "   operator link: $scheme://127.0.0.1:8080/#token=$token   (feed hold, release, chatter signal)"
+  if [[ $secure -eq 1 ]]; then
+    echo "   its certificate comes from the demo's web CA: trust $run/pki/ca/web_ca.pem"
+    echo "   (browser: import it as an authority; curl --cacert $run/pki/ca/web_ca.pem ...)"
+  fi
 fi
 
 CYCLONEDDS_URI=$(uri mtconnect) "$bin/smc-mtconnect" --listen 127.0.0.1:7878 \

@@ -47,6 +47,8 @@ HttpOptions http_options(const Options& o) {
   h.stall_timeout = o.stall_timeout;
   h.heartbeat = o.heartbeat;
   h.max_body = o.max_body;
+  h.tls_cert = o.tls_cert;
+  h.tls_key = o.tls_key;
   return h;
 }
 
@@ -138,7 +140,7 @@ std::uint16_t Dashboard::port() const noexcept { return impl_->server.port(); }
 std::string Dashboard::url() const {
   std::string host = parse_listen_address(impl_->options.http).first;
   if (host.find(':') != std::string::npos) host = "[" + host + "]";
-  return "http://" + host + ":" + std::to_string(port()) + "/";
+  return (impl_->server.tls() ? "https://" : "http://") + host + ":" + std::to_string(port()) + "/";
 }
 
 int run(const Options& options) {

@@ -6,12 +6,15 @@
 #include <atomic>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/write.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 #include <optional>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "api.hpp"
@@ -29,6 +32,14 @@ namespace http = beast::http;
 using tcp = asio::ip::tcp;
 using Clock = std::chrono::steady_clock;
 using Frame = std::shared_ptr<const std::string>;
+// A connection: plain TCP, or TLS over it (HttpOptions::tls_cert).
+using PlainStream = beast::tcp_stream;
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
+
+template <class S>
+tcp::socket& socket_of(S& s) {
+  return beast::get_lowest_layer(s).socket();
+}
 
 constexpr std::size_t kMaxFramesPerWrite = 64;  // one gathered write
 
@@ -47,14 +58,24 @@ Frame make_frame(std::string s) { return std::make_shared<const std::string>(std
 
 // ------------------------------------------------------------------ streams --
 
-class StreamSession;
+// A stream client, whatever its connection (StreamSession<S>).
+class StreamClient {
+ public:
+  virtual ~StreamClient() = default;
+  virtual std::uint64_t id() const = 0;
+  virtual bool wants(const Event& e) const = 0;
+  virtual void push(Frame f) = 0;
+  virtual bool stalled(Clock::time_point now, std::chrono::milliseconds timeout) const = 0;
+  virtual void close() = 0;
+  virtual void write_stats(JsonWriter& w, Clock::time_point now) const = 0;
+};
 
 // All stream clients; lives on the I/O thread.
 class Hub {
  public:
   explicit Hub(const HttpOptions& o) : options_(o) {}
-  void add(std::shared_ptr<StreamSession> s) { sessions_.push_back(std::move(s)); }
-  void remove(const StreamSession* s) {
+  void add(std::shared_ptr<StreamClient> s) { sessions_.push_back(std::move(s)); }
+  void remove(const StreamClient* s) {
     std::erase_if(sessions_, [s](const auto& p) { return p.get() == s; });
   }
   void broadcast(const Event& e);
@@ -70,15 +91,17 @@ class Hub {
   std::uint64_t dropped_closed_ = 0;  // dropped by clients that have gone
 
  private:
-  std::vector<std::shared_ptr<StreamSession>> sessions_;
+  std::vector<std::shared_ptr<StreamClient>> sessions_;
   Clock::time_point last_heartbeat_ = Clock::now();
   std::uint64_t last_id_ = 0;
 };
 
-class StreamSession : public std::enable_shared_from_this<StreamSession> {
+template <class S>
+class StreamSession final : public StreamClient,
+                            public std::enable_shared_from_this<StreamSession<S>> {
  public:
-  StreamSession(tcp::socket socket, StreamRequest filter, Hub& hub, std::string remote)
-      : socket_(std::move(socket)),
+  StreamSession(S stream, StreamRequest filter, Hub& hub, std::string remote)
+      : socket_(std::move(stream)),
         filter_(std::move(filter)),
         hub_(hub),
         queue_(hub.options_.stream_queue_events),
@@ -86,48 +109,51 @@ class StreamSession : public std::enable_shared_from_this<StreamSession> {
         remote_(std::move(remote)),
         connected_(Clock::now()) {}
 
-  std::uint64_t id() const { return id_; }
+  std::uint64_t id() const override { return id_; }
 
   void start(Frame header, Frame hello) {
     beast::error_code ec;
-    socket_.set_option(tcp::no_delay(true), ec);
-    socket_.set_option(asio::socket_base::send_buffer_size(hub_.options_.stream_send_buffer), ec);
+    // The request's timeout no longer applies: the hub watches for stalls.
+    beast::get_lowest_layer(socket_).expires_never();
+    socket_of(socket_).set_option(tcp::no_delay(true), ec);
+    socket_of(socket_).set_option(
+        asio::socket_base::send_buffer_size(hub_.options_.stream_send_buffer), ec);
     inflight_.push_back(std::move(header));  // never dropped: written first
     queue_.push(std::move(hello));
     pump();
     watch_for_close();
   }
 
-  bool wants(const Event& e) const {
+  bool wants(const Event& e) const override {
     if (e.kind == EventKind::kBatch && !filter_.raw) return false;
     if (filter_.mills.empty() || e.mill.empty()) return true;
     return std::find(filter_.mills.begin(), filter_.mills.end(), e.mill) != filter_.mills.end();
   }
 
-  void push(Frame f) {
+  void push(Frame f) override {
     if (closed_) return;
     queue_.push(std::move(f));
     pump();
   }
 
   // Closes a client whose socket has accepted nothing for `timeout`.
-  bool stalled(Clock::time_point now, std::chrono::milliseconds timeout) const {
+  bool stalled(Clock::time_point now, std::chrono::milliseconds timeout) const override {
     return writing_ && now - write_started_ > timeout;
   }
 
-  void close() {
+  void close() override {
     if (closed_) return;
     closed_ = true;
     beast::error_code ec;
-    socket_.shutdown(tcp::socket::shutdown_both, ec);
-    socket_.close(ec);
+    socket_of(socket_).shutdown(tcp::socket::shutdown_both, ec);
+    socket_of(socket_).close(ec);
     hub_.dropped_closed_ += queue_.dropped();
     // The hub may be iterating its sessions: remove after this handler.
     asio::post(socket_.get_executor(),
-               [self = shared_from_this()] { self->hub_.remove(self.get()); });
+               [self = this->shared_from_this()] { self->hub_.remove(self.get()); });
   }
 
-  void write_stats(JsonWriter& w, Clock::time_point now) const {
+  void write_stats(JsonWriter& w, Clock::time_point now) const override {
     w.begin_object()
         .field("id", id_)
         .field("remote", remote_)
@@ -163,7 +189,7 @@ class StreamSession : public std::enable_shared_from_this<StreamSession> {
     writing_ = true;
     write_started_ = Clock::now();
     asio::async_write(socket_, buffers_,
-                      [self = shared_from_this()](beast::error_code ec, std::size_t) {
+                      [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
                         self->writing_ = false;
                         self->sent_ += self->inflight_.size();
                         self->inflight_.clear();
@@ -179,7 +205,7 @@ class StreamSession : public std::enable_shared_from_this<StreamSession> {
   // (end of file, data, error) means it has gone.
   void watch_for_close() {
     socket_.async_read_some(asio::buffer(discard_),
-                            [self = shared_from_this()](beast::error_code ec, std::size_t) {
+                            [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
                               if (ec) {
                                 self->close();
                               } else {
@@ -188,7 +214,7 @@ class StreamSession : public std::enable_shared_from_this<StreamSession> {
                             });
   }
 
-  tcp::socket socket_;
+  S socket_;
   StreamRequest filter_;
   Hub& hub_;
   DropOldestQueue<Frame> queue_;
@@ -215,7 +241,7 @@ void Hub::broadcast(const Event& e) {
 }
 
 void Hub::tick(Clock::time_point now) {
-  std::vector<std::shared_ptr<StreamSession>> stalled;
+  std::vector<std::shared_ptr<StreamClient>> stalled;
   for (const auto& s : sessions_) {
     if (s->stalled(now, options_.stall_timeout)) stalled.push_back(s);
   }
@@ -263,6 +289,8 @@ struct ServerCore {
   HttpOptions options;
   Api& api;
   CellState& state;
+  // Set when the server speaks HTTPS (options.tls_cert).
+  std::optional<asio::ssl::context> tls;
   asio::io_context ioc{1};
   tcp::acceptor acceptor;
   asio::steady_timer timer;
@@ -274,35 +302,95 @@ struct ServerCore {
   std::uint64_t requests = 0;   // I/O thread
   bool stopping = false;        // I/O thread
 
+  std::uint64_t tls_handshakes_failed = 0;  // I/O thread
+
   void accept();
   void schedule_tick();
-  void open_stream(tcp::socket socket, StreamRequest filter, std::string remote);
+  template <class S>
+  void open_stream(S stream, StreamRequest filter, std::string remote);
 };
 
 namespace {
 
-class HttpSession : public std::enable_shared_from_this<HttpSession> {
+template <class S>
+class HttpSession : public std::enable_shared_from_this<HttpSession<S>> {
  public:
-  HttpSession(tcp::socket socket, ServerCore& server)
-      : stream_(std::move(socket)), server_(server), remote_(endpoint_text(stream_.socket())) {
+  // Plain: the stream is the socket; TLS: a TLS stream over it.
+  template <class... TlsContext>
+  HttpSession(tcp::socket socket, ServerCore& server, TlsContext&... tls)
+      : stream_(beast::tcp_stream(std::move(socket)), tls...),
+        server_(server),
+        remote_(endpoint_text(socket_of(stream_))) {
     ++server_.connections;
   }
   ~HttpSession() { --server_.connections; }
 
+  // The TLS handshake first, when there is one, then the first request. A
+  // client that speaks plain HTTP to the HTTPS port is told so, in plain
+  // HTTP, and closed.
+  void start() {
+    if constexpr (std::is_same_v<S, TlsStream>) {
+      beast::get_lowest_layer(stream_).expires_after(server_.options.idle_timeout);
+      beast::async_detect_ssl(beast::get_lowest_layer(stream_), buffer_,
+                              [self = this->shared_from_this()](beast::error_code ec, bool is_tls) {
+                                if (ec) {
+                                  self->close();
+                                } else if (!is_tls) {
+                                  self->refuse_plain();
+                                } else {
+                                  self->handshake();
+                                }
+                              });
+    } else {
+      read();
+    }
+  }
+
+ private:
+  void handshake() {
+    stream_.async_handshake(
+        asio::ssl::stream_base::server, buffer_.data(),
+        [self = this->shared_from_this()](beast::error_code ec, std::size_t used) {
+          if (ec) {
+            // A scanner, or a browser that does not trust the certificate.
+            ++self->server_.tls_handshakes_failed;
+            spdlog::debug("https: handshake with {} failed: {}", self->remote_, ec.message());
+            self->close();
+            return;
+          }
+          self->buffer_.consume(used);
+          self->read();
+        });
+  }
+
+  void refuse_plain() {
+    ++server_.tls_handshakes_failed;
+    static const std::string kRefusal =
+        "HTTP/1.1 400 Bad Request\r\nContent-Type: text/plain; charset=utf-8\r\n"
+        "Connection: close\r\nContent-Length: 48\r\n\r\n"
+        "This dashboard speaks HTTPS only: use https://.\n";
+    asio::async_write(
+        beast::get_lowest_layer(stream_), asio::buffer(kRefusal),
+        [self = this->shared_from_this()](beast::error_code, std::size_t) { self->close(); });
+  }
+
+ public:
   void read() {
     parser_.emplace();
     parser_->body_limit(server_.options.max_body);
     parser_->header_limit(static_cast<std::uint32_t>(server_.options.max_header));
-    stream_.expires_after(server_.options.idle_timeout);
-    http::async_read(
-        stream_, buffer_, *parser_,
-        [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
+    beast::get_lowest_layer(stream_).expires_after(server_.options.idle_timeout);
+    http::async_read(stream_, buffer_, *parser_,
+                     [self = this->shared_from_this()](beast::error_code ec, std::size_t) {
+                       self->on_read(ec);
+                     });
   }
 
  private:
   void on_read(beast::error_code ec) {
     if (ec == http::error::end_of_stream || ec == asio::error::eof || ec == beast::error::timeout ||
-        ec == asio::error::operation_aborted || ec == asio::error::connection_reset) {
+        ec == asio::error::operation_aborted || ec == asio::error::connection_reset ||
+        ec == asio::ssl::error::stream_truncated) {
       close();
       return;
     }
@@ -345,12 +433,11 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
              false);
         return;
       }
-      server_.open_stream(stream_.release_socket(), std::get<StreamRequest>(std::move(parsed)),
-                          remote_);
+      server_.open_stream(std::move(stream_), std::get<StreamRequest>(std::move(parsed)), remote_);
       return;
     }
     try {
-      server_.api.handle(r, [self = shared_from_this()](HttpResponse res) {
+      server_.api.handle(r, [self = this->shared_from_this()](HttpResponse res) {
         // May run on the DDS thread (operator commands): back to the I/O thread.
         asio::post(self->stream_.get_executor(), [self, res = std::move(res)]() mutable {
           self->send(std::move(res), self->keep_alive_);
@@ -381,10 +468,10 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     msg->body() = std::move(res.body);
     msg->keep_alive(keep_alive);
     msg->prepare_payload();
-    stream_.expires_after(server_.options.idle_timeout);
+    beast::get_lowest_layer(stream_).expires_after(server_.options.idle_timeout);
     http::async_write(
         stream_, *msg,
-        [self = shared_from_this(), msg, keep_alive](beast::error_code ec, std::size_t) {
+        [self = this->shared_from_this(), msg, keep_alive](beast::error_code ec, std::size_t) {
           if (ec) {
             self->close();
           } else if (keep_alive && !self->server_.stopping) {
@@ -398,12 +485,24 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   // Closing with unread request bytes would reset the connection and could
   // destroy the answer before the client reads it (a 413 to a large body):
   // stop sending, read and discard what the client still sends, then close.
+  // Over TLS the bytes still to come are records; half-closing the socket
+  // under them would corrupt the stream: end the TLS session, then close.
   void linger() {
+    if constexpr (std::is_same_v<S, TlsStream>) {
+      beast::get_lowest_layer(stream_).expires_after(std::chrono::seconds(2));
+      stream_.async_shutdown(
+          [self = this->shared_from_this()](beast::error_code) { self->close(); });
+      return;
+    } else {
+      linger_plain();
+    }
+  }
+  void linger_plain() {
     beast::error_code ec;
     stream_.socket().shutdown(tcp::socket::shutdown_send, ec);
     stream_.expires_after(std::chrono::seconds(2));
     stream_.async_read_some(asio::buffer(discard_),
-                            [self = shared_from_this()](beast::error_code e, std::size_t) {
+                            [self = this->shared_from_this()](beast::error_code e, std::size_t) {
                               if (e || ++self->lingered_ > 4096) {
                                 self->close();
                               } else {
@@ -413,7 +512,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
   void linger_more() {
     stream_.async_read_some(asio::buffer(discard_),
-                            [self = shared_from_this()](beast::error_code e, std::size_t) {
+                            [self = this->shared_from_this()](beast::error_code e, std::size_t) {
                               if (e || ++self->lingered_ > 4096) {
                                 self->close();
                               } else {
@@ -424,11 +523,11 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void close() {
     beast::error_code ec;
-    stream_.socket().shutdown(tcp::socket::shutdown_both, ec);
-    stream_.socket().close(ec);
+    socket_of(stream_).shutdown(tcp::socket::shutdown_both, ec);
+    socket_of(stream_).close(ec);
   }
 
-  beast::tcp_stream stream_;
+  S stream_;
   ServerCore& server_;
   std::string remote_;
   beast::flat_buffer buffer_;
@@ -448,8 +547,10 @@ void ServerCore::accept() {
         spdlog::warn("http: {} connections open; refusing {}", connections, endpoint_text(socket));
         beast::error_code ignored;
         socket.close(ignored);
+      } else if (tls) {
+        std::make_shared<HttpSession<TlsStream>>(std::move(socket), *this, *tls)->start();
       } else {
-        std::make_shared<HttpSession>(std::move(socket), *this)->read();
+        std::make_shared<HttpSession<PlainStream>>(std::move(socket), *this)->start();
       }
     } else {
       // Out of file descriptors, say: try again shortly rather than spin.
@@ -473,9 +574,10 @@ void ServerCore::schedule_tick() {
   });
 }
 
-void ServerCore::open_stream(tcp::socket socket, StreamRequest filter, std::string remote) {
-  auto session =
-      std::make_shared<StreamSession>(std::move(socket), std::move(filter), hub, std::move(remote));
+template <class S>
+void ServerCore::open_stream(S stream, StreamRequest filter, std::string remote) {
+  auto session = std::make_shared<StreamSession<S>>(std::move(stream), std::move(filter), hub,
+                                                    std::move(remote));
   // The page's starting point, taken on this thread in the same handler that
   // subscribes the client: every later change reaches it as an event.
   JsonWriter w;
@@ -504,7 +606,35 @@ struct HttpServer::Impl : ServerCore {
 };
 
 HttpServer::HttpServer(HttpOptions options, Api& api, CellState& state)
-    : impl_(std::make_unique<Impl>(std::move(options), api, state)) {}
+    : impl_(std::make_unique<Impl>(std::move(options), api, state)) {
+  auto& s = *impl_;
+  if (s.options.tls_cert.empty() != s.options.tls_key.empty()) {
+    throw std::invalid_argument("--tls-cert and --tls-key go together (HTTPS needs both)");
+  }
+  if (s.options.tls_cert.empty()) return;
+  // TLS 1.2 and 1.3 only, OpenSSL's default cipher suites.
+  s.tls.emplace(asio::ssl::context::tls_server);
+  s.tls->set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
+                     asio::ssl::context::no_sslv3 | asio::ssl::context::no_tlsv1 |
+                     asio::ssl::context::no_tlsv1_1 | asio::ssl::context::single_dh_use);
+  beast::error_code ec;
+  s.tls->use_certificate_chain_file(s.options.tls_cert, ec);
+  if (ec) {
+    throw std::runtime_error(s.options.tls_cert +
+                             ": cannot use it as the HTTPS certificate (a PEM certificate "
+                             "chain, server's first): " +
+                             ec.message());
+  }
+  s.tls->use_private_key_file(s.options.tls_key, asio::ssl::context::pem, ec);
+  if (ec) {
+    throw std::runtime_error(s.options.tls_key +
+                             ": cannot use it as the HTTPS key (PEM, the certificate's own "
+                             "key, readable by this user): " +
+                             ec.message());
+  }
+}
+
+bool HttpServer::tls() const noexcept { return impl_->tls.has_value(); }
 
 HttpServer::~HttpServer() { stop(); }
 
@@ -569,6 +699,8 @@ std::string HttpServer::stats_json() const {
   w.begin_object()
       .field("connections", impl_->connections)
       .field("requests", impl_->requests)
+      .field("tls", impl_->tls.has_value())
+      .field("tls_handshakes_failed", impl_->tls_handshakes_failed)
       .field("max_streams", impl_->options.max_streams)
       .field("stream_queue_events", impl_->options.stream_queue_events);
   impl_->hub.write_stats(w, now);

@@ -31,10 +31,15 @@ struct HttpOptions {
   std::chrono::milliseconds idle_timeout{30000};  // keep-alive REST connections
   std::size_t max_body = 4096;                    // request body, bytes
   std::size_t max_header = 8192;                  // request header, bytes
+  // HTTPS: the server's certificate chain and its key (PEM files). Both or
+  // neither; with them the server speaks TLS 1.2+ only.
+  std::string tls_cert;
+  std::string tls_key;
 };
 
 class HttpServer final : public EventSink {
  public:
+  // Throws when the TLS certificate or key cannot be used (naming the file).
   HttpServer(HttpOptions options, Api& api, CellState& state);
   ~HttpServer() override;
   HttpServer(const HttpServer&) = delete;
@@ -45,6 +50,7 @@ class HttpServer final : public EventSink {
   void start();
   void stop() noexcept;
   std::uint16_t port() const noexcept;
+  bool tls() const noexcept;  // speaks HTTPS
 
   // Any thread; never blocks: the event is handed to the I/O thread.
   void publish(Event event) override;

@@ -35,6 +35,12 @@ int main(int argc, char** argv) {
                  "operator tokens, one 'NAME sha256:HEX' line each (--hash-token writes one; "
                  "without the file: read-only)")
       ->check(CLI::ExistingFile);
+  app.add_option("--tls-cert", o.tls_cert,
+                 "HTTPS: the server's certificate chain (PEM; deploy/security/pki.sh https "
+                 "makes one); with --tls-key")
+      ->check(CLI::ExistingFile);
+  app.add_option("--tls-key", o.tls_key, "HTTPS: the certificate's key (PEM)")
+      ->check(CLI::ExistingFile);
   std::string hash_for;
   app.add_option("--hash-token", hash_for,
                  "read a token from stdin and print NAME's line for --token-file, then exit")

@@ -12,6 +12,12 @@
 #       names its MACHINE, the only one whose partition it may use), or a
 #       new certificate for an existing one (rotation: the old one stays
 #       valid until it expires or is revoked)
+#   deploy/security/pki.sh https DIR NAME [HOST...]
+#       an HTTPS server certificate for NAME (the dashboard) naming HOSTs
+#       (host names or IP addresses; default localhost and 127.0.0.1),
+#       signed by the web CA (ca/web_ca.pem, made on first use): the one
+#       certificate a browser or curl is told to trust. Writes
+#       NAME/https.pem and NAME/https.key (smc-dashboard --tls-cert/--tls-key)
 #   deploy/security/pki.sh revoke DIR NAME
 #       re-signs NAME's permissions with a validity that ended (it is refused
 #       from its next handshake on) and moves its identity aside
@@ -209,6 +215,27 @@ issue() {  # issue NAME ROLE [MACHINE]
   echo "$name ($role${machine:+ of $machine}): $d/cyclonedds.xml"
 }
 
+https_cert() {  # https_cert NAME [HOST...]
+  local name=$1 d="$dir/$1" h san=()
+  shift
+  local hosts=("$@")
+  [[ ${#hosts[@]} -gt 0 ]] || hosts=(localhost 127.0.0.1)
+  for h in "${hosts[@]}"; do
+    if [[ $h =~ ^[0-9.]+$ || $h == *:* ]]; then san+=("IP:$h"); else san+=("DNS:$h"); fi
+  done
+  mkdir -p "$dir/ca" "$d"
+  [[ -f "$dir/ca/web_ca.pem" ]] || ca web_ca
+  openssl ecparam -name prime256v1 -genkey -noout -out "$d/https.key" 2>/dev/null
+  chmod 600 "$d/https.key"
+  openssl req -new -key "$d/https.key" -subj "$(subject "$name")" -out "$d/https.csr" 2>/dev/null
+  printf 'subjectAltName=%s\nbasicConstraints=critical,CA:FALSE\nkeyUsage=critical,digitalSignature\nextendedKeyUsage=serverAuth\n' \
+    "$(IFS=,; echo "${san[*]}")" >"$d/https.ext"
+  openssl x509 -req -in "$d/https.csr" -CA "$dir/ca/web_ca.pem" -CAkey "$dir/ca/web_ca.key" \
+    -CAcreateserial -days "$days" -sha256 -extfile "$d/https.ext" -out "$d/https.pem" 2>/dev/null
+  rm -f "$d/https.csr" "$d/https.ext"
+  echo "$name (HTTPS for ${hosts[*]}): $d/https.pem, $d/https.key; trust $dir/ca/web_ca.pem"
+}
+
 case "$cmd" in
   init)
     machines=mill-1,mill-2
@@ -230,6 +257,10 @@ case "$cmd" in
   issue)
     [[ $# -ge 2 ]] || usage
     issue "$1" "$2" "${3:-}"
+    ;;
+  https)
+    [[ $# -ge 1 ]] || usage
+    https_cert "$@"
     ;;
   revoke)
     [[ $# -ge 1 ]] || usage

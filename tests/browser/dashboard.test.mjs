@@ -1,5 +1,8 @@
 // Browser test of smc-dashboard, in Debian's headless Chromium driven by
-// playwright-core. Against a running cell with simulated mills (cell.mjs):
+// playwright-core, over HTTPS (a certificate from the project's web CA,
+// deploy/security/pki.sh https; Chromium trusts that one key, pinned with
+// --ignore-certificate-errors-spki-list, and nothing else) with a hashed
+// token file. Against a running cell with simulated mills (cell.mjs):
 //
 //   1. the page loads and draws mill-1's Grafcet from its SupervisorConfig;
 //   2. the live F_Y chart receives new points (machine time advances);
@@ -25,15 +28,18 @@
 // Every process started here is stopped on success, failure or timeout.
 
 import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
 import { mkdtempSync, rmSync, writeFileSync, mkdirSync, chmodSync } from 'node:fs';
 import { createRequire } from 'node:module';
 import { tmpdir } from 'node:os';
-import { join } from 'node:path';
+import { dirname, join } from 'node:path';
+import { fileURLToPath } from 'node:url';
 
 import { startCell } from './cell.mjs';
 import { CHROMIUM_ARGS, Proc, stopAll } from './processes.mjs';
 
 const BIN = process.env.SMC_BIN_DIR ?? 'build/release/bin';
+const SOURCE = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const ARTIFACTS = process.env.SMC_ARTIFACTS_DIR ?? 'build/release/artifacts';
 const require = createRequire(join(process.env.SMC_NODE_MODULES ?? 'node_modules', 'x.js'));
 const { chromium } = require('playwright-core');
@@ -57,21 +63,27 @@ async function main() {
   const pageErrors = [];
   try {
     const tokens = join(tmp, 'tokens');
-    writeFileSync(tokens, `alice ${TOKEN}\n`);
+    writeFileSync(tokens, execFileSync(`${BIN}/smc-dashboard`, ['--hash-token', 'alice'], { input: `${TOKEN}\n` }));
     chmodSync(tokens, 0o600);
+    // HTTPS: the dashboard's certificate for 127.0.0.1, and the SHA-256 of
+    // its public key, the one key Chromium is told to accept.
+    execFileSync(join(SOURCE, 'deploy/security/pki.sh'), ['https', join(tmp, 'pki'), 'dashboard', '127.0.0.1']);
+    const cert = join(tmp, 'pki/dashboard/https.pem');
+    const spki = execFileSync('sh', ['-c', `openssl x509 -in '${cert}' -pubkey -noout | openssl pkey -pubin -outform der | openssl dgst -sha256 -binary | base64`]).toString().trim();
 
     step(`partition ${partition}: probe, cell and mills, dashboard`);
     const probe = new Proc('probe', `${BIN}/smc-dashboard-probe`, ['--partition', partition, '--mill', 'mill-1']);
     await probe.waitFor(/^ready$/, 10000);
     const cell = await startCell({ binDir: BIN, partition, mills: 2, breakage: true });
     const dashArgs = ['--http', '127.0.0.1:0', '--partition', partition, '--token-file', tokens,
-      '--cell-db', cell.db];
+      '--cell-db', cell.db, '--tls-cert', cert, '--tls-key', join(tmp, 'pki/dashboard/https.key')];
     const dash = new Proc('dashboard', `${BIN}/smc-dashboard`, dashArgs);
-    const [, url] = await dash.waitFor(/listening on (http:\/\/\S+)/, 10000);
+    const [, url] = await dash.waitFor(/listening on (https:\/\/\S+)/, 10000);
 
     step(`chromium on ${url}`);
     context = await chromium.launchPersistentContext(join(tmp, 'profile'), {
-      executablePath: '/usr/bin/chromium', headless: true, args: CHROMIUM_ARGS,
+      executablePath: '/usr/bin/chromium', headless: true,
+      args: [...CHROMIUM_ARGS, `--ignore-certificate-errors-spki-list=${spki}`],
       viewport: { width: 1600, height: 1150 },
     });
     const page = context.pages()[0] ?? await context.newPage();
@@ -211,7 +223,7 @@ async function main() {
     await page.screenshot({ path: join(ARTIFACTS, 'dashboard-job.png'), fullPage: true });
     await dash.stop();
     const dash2 = new Proc('dashboard-2', `${BIN}/smc-dashboard`, dashArgs);
-    const [, url2] = await dash2.waitFor(/listening on (http:\/\/\S+)/, 10000);
+    const [, url2] = await dash2.waitFor(/listening on (https:\/\/\S+)/, 10000);
     await checkHistory(url2);
 
     step('8. the planned SMC I job on its lobe diagram');

@@ -26,9 +26,12 @@ struct Options {
   std::uint32_t domain_id = 0;
   std::string partition;   // DDS partition (empty: the default one)
   std::string dds_config;  // Cyclone DDS XML or file://; empty: CYCLONEDDS_URI or loopback
-  std::string token_file;  // "NAME TOKEN" lines; empty: read-only dashboard
+  std::string token_file;  // "NAME sha256:HEX" lines; empty: read-only dashboard
   std::string web_root;    // serve the page from this folder instead of the embedded copy
   std::string cell_db;     // the cell's SQLite database: job history pages; empty: none
+  // HTTPS: certificate chain and key (PEM); both or neither. Empty: HTTP.
+  std::string tls_cert;
+  std::string tls_key;
 
   std::size_t max_streams = 64;
   std::size_t stream_queue_events = 1024;  // per stream client; oldest dropped beyond
@@ -55,7 +58,7 @@ class Dashboard {
   void stop() noexcept;
 
   std::uint16_t port() const noexcept;
-  std::string url() const;  // http://HOST:PORT/
+  std::string url() const;  // http://HOST:PORT/, or https:// with a certificate
 
  private:
   struct Impl;
