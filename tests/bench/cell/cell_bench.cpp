@@ -7,6 +7,10 @@
 //      every edge reports it in force, beside the same for one edge.
 //   3. The cell service's CPU while N edges run jobs and stream telemetry,
 //      beside its idle CPU over the same window.
+// 2 and 3 run twice, over plain DDS and under DDS Security (a PKI of its
+// own from deploy/security/pki.sh; every process on its own identity, each
+// edge confined to its mill's partition), and print the ratio (issue 16's
+// goal: cell CPU with 20 streaming edges <= 2x plain).
 //
 //   build/release/bin/smc-bench-cell [--edges N] [--plans N] [--window-s S]
 
@@ -24,6 +28,7 @@
 #include <vector>
 
 #include "child_process.hpp"
+#include "secure_dds.hpp"
 #include "smc/cell/planner.hpp"
 #include "smc/cell/store/seed.hpp"
 #include "smc/cell/store/store.hpp"
@@ -59,8 +64,15 @@ void bench_planning(int plans) {
   const auto part = *db.part(job.spec.part_id());
   const auto tool = *db.tool(job.spec.tool_id());
   smc::cell::PlanInputs in{job, part, tool,
-                           db.find_models("mill-1", tool.id, part.material_id, part.id)};
+                           db.find_models("mill-1", tool.id, part.material_id, part.id),
+                           *db.machine("mill-1")};
   const auto sel = smc::cell::select_variant(in);
+  if (!sel.milling) {
+    std::printf("SMC I planning: %s has no validated milling model for mill-1 (%s)\n",
+                part.id.c_str(), std::string(store::variant_name(sel.variant)).c_str());
+    std::filesystem::remove_all(dir);
+    return;
+  }
   double total = 0, crit = 0;
   for (int i = 0; i < plans; ++i) {
     const auto p = planner.plan(in, sel);
@@ -87,15 +99,21 @@ void bench_planning(int plans) {
 
 // Starts n edges, then publishes a configuration to each and waits until all
 // report it in force. Returns seconds.
-double deliver(int n, const std::string& partition, bool print) {
+// An edge process for mill-i, under `dds`.
+std::unique_ptr<smc::test::ChildProcess> start_edge(int i, const std::string& partition,
+                                                    const smc::test::SecureDds& dds) {
+  const std::string m = "mill-" + std::to_string(i);
+  return std::make_unique<smc::test::ChildProcess>(
+      dds.child({smc::test::bin_path("smc-edge"), "--log-level", "warn", "run", "--machine", m,
+                 "--domain", std::to_string(dds.domain()), "--partition", partition, "--paced",
+                 "--no-realtime", "--mill-model", src("cell/models/paper_face_mill.textproto")},
+                "edge-" + m));
+}
+
+double deliver(int n, const std::string& partition, bool print, const smc::test::SecureDds& dds) {
   std::vector<std::unique_ptr<smc::test::ChildProcess>> edges;
-  for (int i = 1; i <= n; ++i) {
-    edges.push_back(std::make_unique<smc::test::ChildProcess>(std::vector<std::string>{
-        smc::test::bin_path("smc-edge"), "--log-level", "warn", "run", "--machine",
-        "mill-" + std::to_string(i), "--partition", partition, "--paced", "--no-realtime",
-        "--mill-model", src("cell/models/paper_face_mill.textproto")}));
-  }
-  tr::Participant p({.partition = partition});
+  for (int i = 1; i <= n; ++i) edges.push_back(start_edge(i, partition, dds));
+  tr::Participant p(dds.participant(partition));
   tr::Topic<smc_data_Envelope> topic(p, smc::wire::kConfigTopic);
   tr::DocumentWriter writer(topic, {"smc.config.SupervisorConfig", 1}, /*per_machine=*/true);
   tr::Topic<smc_data_EdgeStatus> st_topic(p);
@@ -167,7 +185,8 @@ double cpu_seconds(pid_t pid) {
 
 // The cell service's CPU while `n` edge processes run jobs and stream their
 // telemetry at real speed, beside its CPU over the same window with no edge.
-void bench_stream(int n, double window_s) {
+// Returns the cell's CPU share with n edges streaming.
+double bench_stream(int n, double window_s, const smc::test::SecureDds& dds) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("smc-bench-stream-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
@@ -184,19 +203,16 @@ void bench_stream(int n, double window_s) {
     }
   }
   const std::string partition = smc::test::unique_partition("stream");
-  smc::test::ChildProcess cell({smc::test::bin_path("smc-cell"), "--log-level", "warn", "serve",
-                                "--db", db_path, "--partition", partition});
+  smc::test::ChildProcess cell(
+      dds.child({smc::test::bin_path("smc-cell"), "--log-level", "warn", "serve", "--db", db_path,
+                 "--domain", std::to_string(dds.domain()), "--partition", partition},
+                "cell"));
   std::this_thread::sleep_for(std::chrono::seconds(1));
   const double idle0 = cpu_seconds(cell.pid());
   std::this_thread::sleep_for(std::chrono::duration<double>(window_s));
   const double idle = cpu_seconds(cell.pid()) - idle0;
   std::vector<std::unique_ptr<smc::test::ChildProcess>> edges;
-  for (int i = 1; i <= n; ++i) {
-    edges.push_back(std::make_unique<smc::test::ChildProcess>(std::vector<std::string>{
-        smc::test::bin_path("smc-edge"), "--log-level", "warn", "run", "--machine",
-        "mill-" + std::to_string(i), "--partition", partition, "--paced", "--no-realtime",
-        "--mill-model", src("cell/models/paper_face_mill.textproto")}));
-  }
+  for (int i = 1; i <= n; ++i) edges.push_back(start_edge(i, partition, dds));
   {
     auto db = store::Store::open(db_path, store::OpenMode::kExisting);
     smc::config::Job spec;
@@ -222,11 +238,13 @@ void bench_stream(int n, double window_s) {
   double edges1 = 0;
   for (auto& e : edges) edges1 += cpu_seconds(e->pid());
   std::printf(
-      "cell CPU with %d edges streaming (each a job at real speed: ~25 force summaries and "
-      "raw batches/s): %.1f %% of one core; idle: %.1f %%; one edge's own CPU: %.1f %%\n",
-      n, 100 * busy / window_s, 100 * idle / window_s, 100 * (edges1 - edges0) / n / window_s);
+      "%s: cell CPU with %d edges streaming (each a job at real speed: ~25 force summaries "
+      "and raw batches/s): %.1f %% of one core; idle: %.1f %%; one edge's own CPU: %.1f %%\n",
+      dds.name(), n, 100 * busy / window_s, 100 * idle / window_s,
+      100 * (edges1 - edges0) / n / window_s);
   edges.clear();
   std::filesystem::remove_all(dir);
+  return busy / window_s;
 }
 
 }  // namespace
@@ -243,12 +261,26 @@ int main(int argc, char** argv) {
     ::setenv("CYCLONEDDS_URI", ("file://" + src("deploy/cyclonedds/loopback.xml")).c_str(), 1);
   }
   bench_planning(plans);
-  const double one = deliver(1, smc::test::unique_partition("deliver1"), true);
-  const double many = deliver(edges, smc::test::unique_partition("deliverN"), true);
+  std::vector<std::string> machines;
+  for (int i = 1; i <= edges; ++i) machines.push_back("mill-" + std::to_string(i));
+  const smc::test::SecureDds plain;
+  const smc::test::SecureDds secure(7, machines);
+  double many_of[2] = {0, 0};
+  for (const auto* dds : {&plain, &secure}) {
+    const double one = deliver(1, smc::test::unique_partition("deliver1"), true, *dds);
+    const double many = deliver(edges, smc::test::unique_partition("deliverN"), true, *dds);
+    many_of[dds->secure() ? 1 : 0] = many;
+    std::printf(
+        "%s: configuration delivery (checked and in force): 1 edge %.0f ms; %d edges %.0f ms "
+        "(%.1f x one edge)\n",
+        dds->name(), 1000 * one, edges, 1000 * many, many / one);
+  }
+  const double cpu_plain = bench_stream(edges, window_s, plain);
+  const double cpu_secure = bench_stream(edges, window_s, secure);
   std::printf(
-      "configuration delivery (checked and in force): 1 edge %.0f ms; %d edges %.0f ms "
-      "(%.1f x one edge)\n",
-      1000 * one, edges, 1000 * many, many / one);
-  bench_stream(edges, window_s);
+      "DDS Security / plain: delivery to %d edges %.2f x; cell CPU with %d edges streaming "
+      "%.2f x (goal <= 2 x)\n",
+      edges, many_of[0] > 0 ? many_of[1] / many_of[0] : 0.0, edges,
+      cpu_plain > 0 ? cpu_secure / cpu_plain : 0.0);
   return 0;
 }

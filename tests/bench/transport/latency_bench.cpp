@@ -1,6 +1,10 @@
 // Round-trip latency of a ForceSummary sample through smc_transport between
 // two processes on loopback, beside ddsperf ping/pong with the same payload
 // size, measured in the same run. Prints p50/p99 of both and their ratio.
+// Then the round trip of an OperatorCommand (reliable; signed under DDS
+// Security) over plain DDS and under DDS Security (a PKI of its own,
+// deploy/security/pki.sh; both processes on the cell's identity), and what
+// security adds (issue 16's goal: < 1 ms at p99).
 //
 //   build/release/bin/smc-bench-transport-latency [--samples N] [--ddsperf-s S]
 //
@@ -18,6 +22,7 @@
 #include <vector>
 
 #include "child_process.hpp"
+#include "secure_dds.hpp"
 #include "smc/transport/endpoint.hpp"
 #include "smc/transport/participant.hpp"
 #include "smc/wire/topics.hpp"
@@ -43,22 +48,33 @@ Percentiles percentiles(std::vector<double> v) {
   return p;
 }
 
-Percentiles measure_wrapper(size_t samples) {
+// The id a round trip is matched by: a force summary's revolution, an
+// operator command's command id.
+void set_id(smc_data_ForceSummary& s, uint64_t i) { s.revolution = static_cast<uint32_t>(i); }
+uint64_t get_id(const smc_data_ForceSummary& s) { return s.revolution; }
+void set_id(smc_data_OperatorCommand& c, uint64_t i) { c.command_id = i; }
+uint64_t get_id(const smc_data_OperatorCommand& c) { return c.command_id; }
+
+// Round trips of T through the echo process, over `dds` (plain or secure).
+template <class T>
+Percentiles measure_wrapper(size_t samples, const smc::test::SecureDds& dds) {
   const std::string partition = smc::test::unique_partition("bench");
   smc::test::ChildProcess echo(
-      {smc::test::bin_path("smc-transport-echo"), "--partition", partition, "--idle-s", "30"});
+      dds.child({smc::test::bin_path("smc-transport-echo"), "--partition", partition, "--domain",
+                 std::to_string(dds.domain()), "--idle-s", "30"},
+                "cell"));
   if (!echo.wait_for_line("ready")) {
     std::fprintf(stderr, "echo process did not start\n");
     std::exit(2);
   }
-  Participant req({.partition = partition + ".req"});
-  Participant rep({.partition = partition + ".rep"});
-  Topic<smc_data_ForceSummary> out_topic(req), in_topic(rep);
+  Participant req(dds.participant(partition + ".req"));
+  Participant rep(dds.participant(partition + ".rep"));
+  Topic<T> out_topic(req), in_topic(rep);
   // The force-summary topic is best-effort (telemetry); on loopback nothing
   // is lost in practice, and a loss would show as a timeout below.
   const QosProfile qos = out_topic.qos();
-  Writer<smc_data_ForceSummary> w(out_topic, qos);
-  Reader<smc_data_ForceSummary> r(in_topic, qos);
+  Writer<T> w(out_topic, qos);
+  Reader<T> r(in_topic, qos);
   if (!w.wait_for_readers(1, std::chrono::seconds(10)) ||
       !r.wait_for_writers(1, std::chrono::seconds(10))) {
     std::fprintf(stderr, "echo did not match\n");
@@ -68,13 +84,13 @@ Percentiles measure_wrapper(size_t samples) {
   ws.attach(r, 1);
   std::vector<int64_t> fired;
   fired.reserve(8);
-  smc_data_ForceSummary s{};
+  T s{};
   smc::wire::set_string(s.machine_id, "mill-01");
   std::vector<double> rtt;
   rtt.reserve(samples);
   const size_t warmup = std::max<size_t>(200, samples / 20);
   for (size_t i = 0; i < samples + warmup; ++i) {
-    s.revolution = static_cast<uint32_t>(i);
+    set_id(s, i + 1);
     const auto t0 = Clock::now();
     w.write(s);
     bool got = false;
@@ -84,8 +100,8 @@ Percentiles measure_wrapper(size_t samples) {
         std::fprintf(stderr, "timeout waiting for echo of %zu\n", i);
         std::exit(2);
       }
-      r.take([&](const smc_data_ForceSummary& back, const SampleInfo& info) {
-        if (info.valid_data && back.revolution == s.revolution) got = true;
+      r.take([&](const T& back, const SampleInfo& info) {
+        if (info.valid_data && get_id(back) == i + 1) got = true;
       });
     }
     const auto t1 = Clock::now();
@@ -153,7 +169,8 @@ int main(int argc, char** argv) {
   // Serialized ForceSummary: 4 (CDR header) + 4+8 ("mill-01") + 4 pad + 8 + 4 + 2+2 + 8*4 + 2.
   const int payload = 72;
   std::printf("ForceSummary round trip, two processes on loopback (%zu samples)\n", samples);
-  const Percentiles ours = measure_wrapper(samples);
+  const smc::test::SecureDds plain;
+  const Percentiles ours = measure_wrapper<smc_data_ForceSummary>(samples, plain);
   std::printf("  smc_transport      p50 %8.1f us   p99 %8.1f us\n", ours.p50_us, ours.p99_us);
   const auto ref = measure_ddsperf(ddsperf_s, payload);
   if (!ref) return 2;
@@ -162,5 +179,17 @@ int main(int argc, char** argv) {
   const double r50 = ours.p50_us / ref->p50_us, r99 = ours.p99_us / ref->p99_us;
   std::printf("  ratio              p50 %8.2f      p99 %8.2f      (goal: p50 <= 1.5) %s\n", r50,
               r99, r50 <= 1.5 ? "MET" : "MISSED");
+
+  const smc::test::SecureDds secure(7, {});
+  std::printf("OperatorCommand round trip, two processes on loopback (%zu samples)\n", samples);
+  const Percentiles cmd_plain = measure_wrapper<smc_data_OperatorCommand>(samples, plain);
+  std::printf("  plain DDS          p50 %8.1f us   p99 %8.1f us\n", cmd_plain.p50_us,
+              cmd_plain.p99_us);
+  const Percentiles cmd_secure = measure_wrapper<smc_data_OperatorCommand>(samples, secure);
+  std::printf("  DDS Security       p50 %8.1f us   p99 %8.1f us\n", cmd_secure.p50_us,
+              cmd_secure.p99_us);
+  const double added = cmd_secure.p99_us - cmd_plain.p99_us;
+  std::printf("  added by security  p50 %+8.1f us   p99 %+8.1f us   (goal: p99 < +1000 us) %s\n",
+              cmd_secure.p50_us - cmd_plain.p50_us, added, added < 1000 ? "MET" : "MISSED");
   return 0;
 }

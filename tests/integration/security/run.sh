@@ -12,6 +12,10 @@
 # mill-1 on it is refused at start; its chatter-event writer in mill-1's
 # partition is refused; a chatter event about mill-1 written from its own
 # partition is dropped by the cell, which logs the refusal.
+# Then, while the job still cuts, certificates are rotated: the dashboard's
+# (its new identity commands the mill, which was not restarted) and the
+# cell's (the cell restarts on its new one and goes on tracking the job,
+# which completes on its first attempt).
 # Usage: run.sh BIN_DIR SOURCE_DIR
 set -euo pipefail
 bin=$1
@@ -102,9 +106,32 @@ rc=$(client "$(profile dashboard)" 20 dashboard)
 [[ $rc == 0 ]] || fail "the dashboard's identity: smc-c-client exited $rc (0: the mill obeyed)"
 echo "ok: the dashboard's identity holds and releases the feed right after"
 
+# Rotation while the job cuts (pki.sh issue over an existing name: a new key
+# and certificate; processes load theirs at start).
+[[ "$(state)" == running ]] || fail "the job is no longer running before the rotation ($(state))"
+old_cell=$(openssl x509 -in "$work/pki/cell/identity.pem" -noout -serial)
+"$src/deploy/security/pki.sh" issue "$work/pki" dashboard dashboard >/dev/null
+rc=$(client "$(profile dashboard)" 20 dashboard-rotated)
+[[ $rc == 0 ]] || fail "the dashboard's rotated identity: smc-c-client exited $rc (0: the mill obeyed)"
+echo "ok: the dashboard's certificate rotated while the job cuts: the new one commands the mill"
+"$src/deploy/security/pki.sh" issue "$work/pki" cell cell >/dev/null
+[[ "$(openssl x509 -in "$work/pki/cell/identity.pem" -noout -serial)" != "$old_cell" ]] ||
+  fail "pki.sh issue did not make the cell a new certificate"
+kill "${pids[0]}"
+wait "${pids[0]}" 2>/dev/null || true
+CYCLONEDDS_URI=$(profile cell) "$bin/smc-cell" serve --db "$work/cell.db" --partition "$partition" \
+  >"$work/cell-rotated.log" 2>&1 &
+pids[0]=$!
+echo "ok: the cell restarted on its rotated certificate while the job cuts (state $(state))"
+
 for _ in $(seq 1 600); do
   case "$(state)" in done | failed) break ;; esac
   sleep 0.2
 done
 [[ "$(state)" == done ]] || fail "the job did not finish (state $(state))"
-echo "PASS: DDS Security: the job completed; 3 intruders and mill-2's edge acting as mill-1 refused, the operator obeyed"
+"$bin/smc-cell" job show "$job" --db "$work/cell.db" | head -1 | grep -q "(attempt 1)" ||
+  fail "the job was dispatched again: $("$bin/smc-cell" job show "$job" --db "$work/cell.db" | head -1)"
+grep -q "edge mill-1" "$work/cell-rotated.log" ||
+  fail "the cell on its rotated certificate never heard from the edge"
+echo "ok: the job completed on its first attempt across both rotations"
+echo "PASS: DDS Security: the job completed across two rotations; 3 intruders and mill-2's edge acting as mill-1 refused, the operator obeyed"

@@ -51,11 +51,13 @@ struct Echo : EchoBase {
 
 int main(int argc, char** argv) {
   std::string partition = "echo";
+  uint32_t domain = 0;
   double idle_s = 60;
   int publish_configs = 0;
   for (int i = 1; i + 1 < argc; i += 2) {
     std::string a = argv[i];
     if (a == "--partition") partition = argv[i + 1];
+    if (a == "--domain") domain = static_cast<uint32_t>(std::atoi(argv[i + 1]));
     if (a == "--idle-s") idle_s = std::atof(argv[i + 1]);
     if (a == "--publish-configs") publish_configs = std::atoi(argv[i + 1]);
   }
@@ -75,8 +77,8 @@ int main(int argc, char** argv) {
     std::this_thread::sleep_for(std::chrono::duration<double>(idle_s));
     return 0;
   }
-  Participant in({.partition = partition + ".req"});
-  Participant out({.partition = partition + ".rep"});
+  Participant in({.domain_id = domain, .partition = partition + ".req"});
+  Participant out({.domain_id = domain, .partition = partition + ".rep"});
   std::vector<std::unique_ptr<EchoBase>> echoes;
   echoes.push_back(std::make_unique<Echo<smc_data_ForceSummary>>(in, out));
   echoes.push_back(std::make_unique<Echo<smc_data_ForceBatch>>(in, out));
