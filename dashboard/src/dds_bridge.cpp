@@ -183,7 +183,15 @@ struct DdsBridge::Impl {
       cmd.issued_unix_ns = rec.issued_unix_ns;
       cmd.action = static_cast<std::int32_t>(wire_action(rec.request.action));
       try {
-        command_writer(rec.request.machine_id).write(cmd);
+        auto& writer = command_writer(rec.request.machine_id);
+        // Commands are volatile: one written while no edge of the mill
+        // reads them is lost, so say so rather than report it sent.
+        if (writer.publication_matched().current_count == 0) {
+          throw std::runtime_error("no edge of " + rec.request.machine_id +
+                                   " is reading operator commands (not running, or not yet "
+                                   "matched): not delivered");
+        }
+        writer.write(cmd);
         rec.sent = true;
         commands_sent.fetch_add(1, std::memory_order_relaxed);
         spdlog::info("operator command {} sent: {} on {} by operator '{}' from {}", rec.command_id,

@@ -292,6 +292,25 @@ TEST(DashboardApi, AMillWhoseEdgeIsGoneIsShownOffline) {
   EXPECT_EQ(field(field(mill, "status"), "state").string_value(), "EDGE_RUNNING");  // last known
 }
 
+// A command is volatile: one for a mill whose edge no longer reads
+// commands would be lost, so the operator is told, not shown it sent.
+TEST(DashboardApi, ACommandNoEdgeReadsIsRefusedAsNotDelivered) {
+  DashboardFixture f;
+  ASSERT_TRUE(f.make_mill("mill-t"));
+  f.drop_cell();  // its command reader goes with it
+  ASSERT_TRUE(eventually([&] {
+    const auto r = http(f.port(), "POST", "/api/mills/mill-t/commands",
+                        R"({"action":"feed_hold_on"})", kJson + bearer(kBobToken));
+    return r.status == 503 &&
+           r.body.find("no edge of mill-t is reading operator commands") != std::string::npos;
+  }));
+  const auto log = parse_json(http(f.port(), "GET", "/api/commands").body);
+  ASSERT_GE(log.list_value().values_size(), 1);
+  EXPECT_FALSE(field(log.list_value().values(0), "sent").bool_value());
+  EXPECT_NE(field(log.list_value().values(0), "error").string_value().find("not delivered"),
+            std::string::npos);
+}
+
 TEST(DashboardApi, KeepAliveConnectionsServeSeveralRequests) {
   DashboardFixture f;
   Socket s(f.port());
