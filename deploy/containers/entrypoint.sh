@@ -14,6 +14,9 @@
 #   SMC_LOG_LEVEL, SMC_LOG_FORMAT                       the services' logging
 #   SMC_DDS_PEERS          more Cyclone DDS peers (names or addresses, space-separated)
 #   SMC_DDS_TRACE          file for Cyclone DDS discovery tracing (peers found and lost)
+#   SMC_DDS_SECURITY       DDS Security: this participant's security.xml from
+#                          deploy/security/pki.sh (its identity, permissions and the
+#                          cell's CAs), added to the profile; readable by this user
 #   CYCLONEDDS_URI         [file:///etc/smc/cyclonedds/container.xml]
 #   cell:      SMC_CELL_DB [/var/lib/smc/cell.db]  SMC_CELL_SEED [0]
 #              SMC_EDGE_GRACE_MS [6000]  SMC_MAX_ATTEMPTS [3]
@@ -43,6 +46,14 @@ if [[ -n "${SMC_DDS_PEERS:-}" ]]; then
     peers+="<Peer address=\"$p\"/>"
   done
   uri+=",<Discovery><Peers>$peers</Peers></Discovery>"
+fi
+if [[ -n "${SMC_DDS_SECURITY:-}" ]]; then
+  if [[ ! -r "$SMC_DDS_SECURITY" ]]; then
+    echo "smc-entrypoint: SMC_DDS_SECURITY: cannot read '$SMC_DDS_SECURITY' as uid $(id -u)" \
+      "(a participant's security.xml from deploy/security/pki.sh, mounted with its files)" >&2
+    exit 2
+  fi
+  uri+=",$(tr -d '\n' <"$SMC_DDS_SECURITY")"
 fi
 if [[ -n "${SMC_DDS_TRACE:-}" ]]; then
   uri+=",<Tracing><Category>discovery</Category><OutputFile>$SMC_DDS_TRACE</OutputFile></Tracing>"

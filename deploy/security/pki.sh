@@ -24,8 +24,10 @@
 #
 # Layout of DIR: ca/ (identity_ca.pem, permissions_ca.pem and their keys),
 # governance.p7s, NAME/{identity.pem,identity.key,permissions.p7s,
-# cyclonedds.xml}. Point a process at NAME/cyclonedds.xml with
-# CYCLONEDDS_URI=file://DIR/NAME/cyclonedds.xml.
+# cyclonedds.xml,security.xml}. Point a process at NAME/cyclonedds.xml with
+# CYCLONEDDS_URI=file://DIR/NAME/cyclonedds.xml (the loopback profile), or
+# add NAME/security.xml to another profile (the smc image's entry point does,
+# with SMC_DDS_SECURITY=DIR/NAME/security.xml).
 set -euo pipefail
 
 usage() { sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 2; }
@@ -149,8 +151,32 @@ XML
   sign "$dir/$name/permissions.xml" "$dir/$name/permissions.p7s"
 }
 
-profile() {  # profile NAME
+security_xml() {  # security_xml NAME: its Security section, alone (a Cyclone DDS fragment)
   local d="$dir/$1"
+  cat >"$d/security.xml" <<XML
+<Security>
+  <Authentication>
+    <Library path="dds_security_auth" initFunction="init_authentication" finalizeFunction="finalize_authentication"/>
+    <IdentityCA>file:$dir/ca/identity_ca.pem</IdentityCA>
+    <IdentityCertificate>file:$d/identity.pem</IdentityCertificate>
+    <PrivateKey>file:$d/identity.key</PrivateKey>
+  </Authentication>
+  <AccessControl>
+    <Library path="dds_security_ac" initFunction="init_access_control" finalizeFunction="finalize_access_control"/>
+    <PermissionsCA>file:$dir/ca/permissions_ca.pem</PermissionsCA>
+    <Governance>file:$dir/governance.p7s</Governance>
+    <Permissions>file:$d/permissions.p7s</Permissions>
+  </AccessControl>
+  <Cryptographic>
+    <Library path="dds_security_crypto" initFunction="init_crypto" finalizeFunction="finalize_crypto"/>
+  </Cryptographic>
+</Security>
+XML
+}
+
+profile() {  # profile NAME: the loopback profile with NAME's Security section
+  local d="$dir/$1"
+  security_xml "$1"
   cat >"$d/cyclonedds.xml" <<XML
 <?xml version="1.0" encoding="UTF-8"?>
 <!-- $1: the loopback profile (deploy/cyclonedds/loopback.xml) with DDS Security. -->
@@ -165,23 +191,7 @@ profile() {  # profile NAME
       <MaxAutoParticipantIndex>119</MaxAutoParticipantIndex>
       <Peers><Peer address="127.0.0.1"/></Peers>
     </Discovery>
-    <Security>
-      <Authentication>
-        <Library path="dds_security_auth" initFunction="init_authentication" finalizeFunction="finalize_authentication"/>
-        <IdentityCA>file:$dir/ca/identity_ca.pem</IdentityCA>
-        <IdentityCertificate>file:$d/identity.pem</IdentityCertificate>
-        <PrivateKey>file:$d/identity.key</PrivateKey>
-      </Authentication>
-      <AccessControl>
-        <Library path="dds_security_ac" initFunction="init_access_control" finalizeFunction="finalize_access_control"/>
-        <PermissionsCA>file:$dir/ca/permissions_ca.pem</PermissionsCA>
-        <Governance>file:$dir/governance.p7s</Governance>
-        <Permissions>file:$d/permissions.p7s</Permissions>
-      </AccessControl>
-      <Cryptographic>
-        <Library path="dds_security_crypto" initFunction="init_crypto" finalizeFunction="finalize_crypto"/>
-      </Cryptographic>
-    </Security>
+$(sed 's/^/    /' "$d/security.xml")
   </Domain>
 </CycloneDDS>
 XML

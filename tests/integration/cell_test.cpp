@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <random>
@@ -510,6 +511,39 @@ TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {
     EXPECT_EQ(job(id)->attempt, 1u) << id;
   }
   EXPECT_EQ(jobs().size(), 3u);
+}
+
+// A cell frozen past its DDS lease (a paused container, SIGSTOP) may have
+// been dropped by its peers while it still holds them; under DDS Security
+// Cyclone DDS does not heal that one-sided loss, so the thawed cell rejoins
+// with a new participant (here with a 1 s lease: frozen for 2 s), says so,
+// and carries on: every job done, none run twice.
+TEST_F(Cell, ACellFrozenPastItsLeaseRejoinsAndNothingRunsTwice) {
+  const std::string log = (dir_ / "cell.log").string();
+  const std::string uri = std::string("CYCLONEDDS_URI=file://") + SMC_DDS_PROFILE_PATH +
+                          ",<Discovery><LeaseDuration>1s</LeaseDuration></Discovery>";
+  cell_.emplace(std::vector<std::string>{
+      "/bin/sh", "-c", "exec /usr/bin/env '" + uri + "' \"$0\" \"$@\" 2>'" + log + "'",
+      bin("smc-cell"), "--log-level", "info", "serve", "--db", db_, "--partition", partition_,
+      "--edge-grace-ms", "1500"});
+  start_edge("mill-1");
+  start_edge("mill-2");
+  const std::string tl = submit("cell/jobs/transfer_line.textproto");
+  const std::string js = submit("cell/jobs/job_shop.json");
+  ASSERT_TRUE(wait_jobs(
+      {tl, js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+  cell_->kill(SIGSTOP);
+  std::this_thread::sleep_for(2s);  // the fault itself: frozen for twice the lease
+  cell_->kill(SIGCONT);
+  ASSERT_TRUE(wait_jobs(
+      {tl, js}, [](const store::Job& j) { return j.state == cfg::JOB_DONE; }, 240s));
+  for (const auto& id : {tl, js}) {
+    EXPECT_EQ(count_to(events(id), cfg::JOB_RUNNING), 1) << id << " ran more than once";
+    EXPECT_EQ(job(id)->attempt, 1u) << id;
+  }
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("rejoining with a new participant"), std::string::npos) << text;
 }
 
 TEST_F(Cell, KilledEdgeInterruptsItsJobWhichIsRequeued) {

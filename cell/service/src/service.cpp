@@ -6,12 +6,16 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <set>
+#include <thread>
 #include <vector>
 
 #include "smc/cell/candidates.hpp"
@@ -97,6 +101,47 @@ struct Progress {
 
 }  // namespace
 
+// Notices that the whole process was frozen (SIGSTOP, a paused container, a
+// debugger): a thread that wakes every 100 ms keeps the longest gap between
+// its wake-ups. A slow database call or plan does not stop it, and neither
+// stops Cyclone DDS's own threads, which keep the participant's lease.
+class FreezeWatch {
+ public:
+  FreezeWatch() : thread_([this] { watch(); }) {}
+  ~FreezeWatch() {
+    {
+      std::lock_guard lock(mu_);
+      done_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+  }
+  FreezeWatch(const FreezeWatch&) = delete;
+  FreezeWatch& operator=(const FreezeWatch&) = delete;
+
+  // The longest gap since the last call.
+  std::chrono::nanoseconds take_longest() { return std::chrono::nanoseconds(longest_.exchange(0)); }
+
+ private:
+  void watch() {
+    std::unique_lock lock(mu_);
+    auto last = Clock::now();
+    while (!cv_.wait_for(lock, std::chrono::milliseconds(100), [this] { return done_; })) {
+      const auto now = Clock::now();
+      const std::int64_t gap = (now - last).count();
+      std::int64_t seen = longest_.load();
+      while (gap > seen && !longest_.compare_exchange_weak(seen, gap)) {
+      }
+      last = now;
+    }
+  }
+  std::mutex mu_;
+  std::condition_variable cv_;
+  bool done_ = false;
+  std::atomic<std::int64_t> longest_{0};
+  std::thread thread_;  // last: it starts once the members it uses exist
+};
+
 struct CellService::Impl {
   ServiceOptions opt;
   DatabaseLock lock;  // before the database is opened
@@ -148,6 +193,10 @@ struct CellService::Impl {
   std::set<std::string> retired;                              // machines that take no new jobs
   std::map<std::string, std::string> out_on;  // machine -> job whose assignment was sent
   int64_t data_version = -1;
+  // Frozen longer than this: peers may have dropped this participant (half
+  // its lease, which is how long they keep it after its last message).
+  std::chrono::nanoseconds rejoin_after = participant.lease() / 2;
+  FreezeWatch freeze_watch;
   Clock::time_point started = Clock::now();
   Clock::time_point last_scan{};
 
@@ -869,6 +918,15 @@ struct CellService::Impl {
     for (const auto& j : db.jobs({.with_documents = true})) publish_status(j, "current");
     publish_catalog();
     while (!stop.load()) {
+      if (const auto frozen = freeze_watch.take_longest(); frozen > rejoin_after) {
+        spdlog::warn(
+            "cell: the process was frozen for {} ms, more than half its DDS lease ({} ms): its "
+            "peers may have dropped it; rejoining with a new participant",
+            std::chrono::duration_cast<std::chrono::milliseconds>(frozen).count(),
+            std::chrono::duration_cast<std::chrono::milliseconds>(2 * rejoin_after).count());
+        flush_history();
+        return CellService::kRejoinDds;
+      }
       dispatcher.run_once(50ms);
       const int64_t v = db.data_version();
       if (v != data_version || Clock::now() - last_scan > 1s) {

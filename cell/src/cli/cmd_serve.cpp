@@ -61,8 +61,10 @@ SMC_CELL_COMMAND(serve, 10) {
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     try {
-      smc::cell::CellService service(*opt);
-      service.run(g_stop);
+      // A new service (a new DDS participant, state read again from the
+      // database) when the last one was frozen past its lease.
+      while (smc::cell::CellService(*opt).run(g_stop) == smc::cell::CellService::kRejoinDds) {
+      }
     } catch (const smc::cell::store::StoreError& e) {
       throw smc::cell::cli::Failure(2, e.what());
     }

@@ -92,6 +92,15 @@ Participant::Participant(ParticipantOptions options) : options_(std::move(option
                                      "dds_create_subscriber", what));
 }
 
+std::chrono::nanoseconds Participant::lease() const {
+  detail::Qos q;
+  detail::check(dds_get_qos(entity_.handle(), q.get()), "dds_get_qos", "participant");
+  dds_liveliness_kind_t kind{};
+  dds_duration_t lease = DDS_INFINITY;
+  if (!dds_qget_liveliness(q.get(), &kind, &lease)) lease = DDS_SECS(10);  // Cyclone's default
+  return std::chrono::nanoseconds(lease);
+}
+
 EntityHandle Participant::publisher_for(const std::string& machine) {
   if (!options_.machine.empty()) {
     if (machine == options_.machine) return publisher_.handle();

@@ -16,6 +16,9 @@
 #     --timeout SECONDS            hard limit for the whole run (default 2400: a cold image build included)
 #     --prepare                    set up (packages, base image, image) and stop
 #     --keep                       keep the run folder's logs even when everything passed
+#     --insecure                   plain DDS; by default every service runs under DDS
+#                                  Security (a PKI made for the run by deploy/security/pki.sh,
+#                                  each service on its own identity and permissions)
 #
 # Needs root (podman, network namespaces). Nothing leaves the machine: the
 # containers' network is --internal, the image build runs with --network=none,
@@ -31,6 +34,7 @@ BIN_DIR=$ROOT/build/release/bin
 timeout_s=${SMC_CT_TIMEOUT:-2400}
 prepare=0
 keep=0
+secure=1
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --backend) backend=$2; shift 2 ;;
@@ -39,6 +43,7 @@ while [[ $# -gt 0 ]]; do
     --timeout) timeout_s=$2; shift 2 ;;
     --prepare) prepare=1; shift ;;
     --keep) keep=1; shift ;;
+    --insecure) secure=0; shift ;;
     -h | --help) sed -n '3,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
     *) echo "run.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -72,6 +77,16 @@ fi
 
 # ------------------------------------------------------ cleanup, watchdog --
 
+# DDS Security: one PKI for the run; the services (uid 10001 in the image)
+# read their identity from it, mounted at the same path.
+SECURE_PKI=""
+if [[ $secure -eq 1 && $prepare -eq 0 ]]; then
+  SECURE_PKI=$RUN_DIR/pki
+  "$ROOT/deploy/security/pki.sh" init "$SECURE_PKI" --machines mill-1,mill-2 >"$RUN_DIR/pki.log" ||
+    die "could not make the run's PKI (log: $RUN_DIR/pki.log)"
+  chown -R 10001:10001 "$SECURE_PKI"
+fi
+
 backend_ready=0
 scenario_pid=""
 summary_done=0
@@ -82,7 +97,7 @@ print_summary() {
   summary_done=1
   local s f v passed=0 failed=0 row='%-11s %-6s %-8s %-9s %-8s %-16s %s\n'
   echo
-  echo "== containerised integration tests, backend: ${BACKEND_NAME:-none}"
+  echo "== containerised integration tests, backend: ${BACKEND_NAME:-none}; DDS Security: $([[ -n "$SECURE_PKI" ]] && echo on || echo off)"
   # shellcheck disable=SC2059  # the format is the row above
   printf "$row" scenario result detect recover jobs chatter total
   # shellcheck disable=SC2059

@@ -111,3 +111,13 @@ dds_found_after() {
 # max_of / min_of: the largest / smallest of the numbers given ("" if none).
 max_of() { printf '%s\n' "$@" | awk 'NF { if (!n++ || $1 > m) m = $1 } END { if (n) print m }'; }
 min_of() { printf '%s\n' "$@" | awk 'NF { if (!n++ || $1 < m) m = $1 } END { if (n) print m }'; }
+
+# security_file SERVICE: the service's DDS Security fragment (pki.sh's
+# security.xml of its identity), or nothing when the run is insecure.
+security_file() {
+  [[ -n "${SECURE_PKI:-}" ]] || return 0
+  case "$1" in
+    edge-*) echo "$SECURE_PKI/edge-mill-${1#edge-}/security.xml" ;;
+    *) echo "$SECURE_PKI/$1/security.xml" ;;
+  esac
+}

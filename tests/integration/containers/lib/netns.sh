@@ -97,6 +97,7 @@ be_start() {
     CYCLONEDDS_URI="file://$ROOT/deploy/cyclonedds/container.xml"
     SMC_PARTITION="$PARTITION" SMC_DDS_TRACE="$dir/dds.log" SMC_LOG_LEVEL=info
     SMC_CELL_DATA="$ROOT/cell")
+  [[ -z "${SECURE_PKI:-}" ]] || env+=(SMC_DDS_SECURITY="$(security_file "$svc")")
   case "$svc" in
     cell)
       env+=(SMC_CELL_DB="$SCENARIO_DIR/db/cell.db" SMC_CELL_SEED=1 SMC_EDGE_GRACE_MS="$EDGE_GRACE_MS")

@@ -64,6 +64,9 @@ be_start() {
     -e "SMC_PARTITION=$PARTITION" -e SMC_DDS_TRACE=/var/log/smc/dds.log -e SMC_LOG_LEVEL=info)
   local peer
   for peer in "${!SVC_IP[@]}"; do args+=(--add-host "$peer:$(be_ip "$peer")"); done
+  if [[ -n "${SECURE_PKI:-}" ]]; then
+    args+=(-v "$SECURE_PKI:$SECURE_PKI:ro" -e "SMC_DDS_SECURITY=$(security_file "$svc")")
+  fi
   case "$svc" in
     cell)
       args+=(-v "$(cname db):/var/lib/smc" -e SMC_CELL_SEED=1 -e "SMC_EDGE_GRACE_MS=$EDGE_GRACE_MS")

@@ -41,7 +41,15 @@ class CellService {
   ~CellService();
   CellService(const CellService&) = delete;
   CellService& operator=(const CellService&) = delete;
+  // Serves until `stop`; returns 0, or kRejoinDds when the process was
+  // frozen (suspended, paused) for longer than half its DDS participant
+  // lease: its peers may have dropped its participant while it still holds
+  // theirs, and under DDS Security such a one-sided loss is not healed by
+  // Cyclone DDS 0.10 (eclipse-cyclonedds/cyclonedds#1895). The caller then
+  // makes a new CellService, which joins with a new participant, as a
+  // restarted cell would.
   int run(const std::atomic<bool>& stop);
+  static constexpr int kRejoinDds = 75;
 
  private:
   struct Impl;

@@ -1,6 +1,7 @@
 #pragma once
 // A domain participant, with the network profile pinned before it exists.
 
+#include <chrono>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -55,6 +56,9 @@ class Participant {
   EntityHandle publisher_for(const std::string& machine);
   EntityHandle subscriber() const noexcept { return subscriber_.handle(); }
   const ParticipantOptions& options() const noexcept { return options_; }
+  // The participant lease it announces (Cyclone's Discovery/LeaseDuration):
+  // how long its peers keep it after its last message.
+  std::chrono::nanoseconds lease() const;
 
   // The compiled-in loopback profile (deploy/cyclonedds/loopback.xml).
   static const char* loopback_profile() noexcept;
