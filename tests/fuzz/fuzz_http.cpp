@@ -1,6 +1,11 @@
 // The dashboard's HTTP decoders: the request target (path segments and
-// query, percent-decoded) and the operator token file and Authorization
-// header. The first byte picks which; the rest is the input.
+// query, percent-decoded), the operator token file and Authorization
+// header, and a whole request as the server reads it (Boost.Beast's parser
+// with the server's limits, then the target and the Authorization header).
+// The first byte picks which; the rest is the input.
+#include <boost/asio/buffer.hpp>
+#include <boost/beast/http/parser.hpp>
+#include <boost/beast/http/string_body.hpp>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -22,7 +27,7 @@ void check(bool ok) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   const std::string_view in(reinterpret_cast<const char*>(data) + 1, size - 1);
-  switch (data[0] % 2) {
+  switch (data[0] % 3) {
     case 0: {
       const auto t = smc::dashboard::parse_target(in);
       if (!t) return 0;
@@ -46,6 +51,32 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       } catch (const std::runtime_error&) {
         // a bad line, reported: fine
       }
+      break;
+    }
+    case 2: {
+      // As HttpServer reads a request: the same body and header limits.
+      namespace http = boost::beast::http;
+      http::request_parser<http::string_body> parser;
+      parser.body_limit(4096);
+      parser.header_limit(8192);
+      parser.eager(true);
+      boost::beast::error_code ec;
+      std::size_t used = 0;
+      while (!ec && used < in.size() && !parser.is_done()) {
+        const std::size_t n =
+            parser.put(boost::asio::buffer(in.data() + used, in.size() - used), ec);
+        if (n == 0 && !ec) break;  // needs more than there is
+        used += n;
+      }
+      if (ec || !parser.is_header_done()) return 0;
+      const auto& req = parser.get();
+      const auto target = req.target();
+      (void)smc::dashboard::parse_target(std::string_view(target.data(), target.size()));
+      const auto auth = req[http::field::authorization];
+      static const auto kOperators = smc::dashboard::Auth::parse(
+          "alice sha256:b19dd0d3436da6a4171b05d7ad2f0c8a52e88e21834b66c2ce9ad3df58c46eea\n",
+          "fuzz");
+      (void)kOperators.authenticate(std::string_view(auth.data(), auth.size()));
       break;
     }
   }
