@@ -162,6 +162,9 @@ const std::string* ReaderBase::writer_machine(uint64_t publication_handle) {
   dds_builtintopic_endpoint_t* ep =
       dds_get_matched_publication_data(entity_.handle(), publication_handle);
   if (ep == nullptr) return nullptr;  // not matched (any more): not cached
+  // Writers come and go (every edge restart brings new ones): forget them
+  // all now and then rather than keep every one ever seen.
+  if (writers_.size() >= 4096) writers_.clear();
   std::string machine;
   uint32_t n = 0;
   char** names = nullptr;
