@@ -15,6 +15,9 @@
 //
 // Browser arrival (the page's EventSource handler) is measured by
 // smc-bench-dashboard-browser (tests/bench/dashboard/browser_latency.mjs).
+// The whole measurement runs twice: over plain DDS, then under DDS Security
+// (a PKI of its own: the dashboard on its identity, the publishers and the
+// echo on the cell's), and prints what security adds.
 
 #include <sys/socket.h>
 #include <unistd.h>
@@ -33,6 +36,7 @@
 
 #include "child_process.hpp"
 #include "http_client.hpp"
+#include "secure_dds.hpp"
 #include "smc/transport/endpoint.hpp"
 #include "smc/transport/participant.hpp"
 #include "smc/wire/topics.hpp"
@@ -129,34 +133,24 @@ std::string json_value(const std::string& s, const std::string& key) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  int mills = 10;
-  int seconds = 10;
-  int cell_clients = 2;
-  int mill_clients = 2;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    const int v = std::atoi(argv[i + 1]);
-    if (a == "--mills") mills = std::clamp(v, 1, 50);
-    if (a == "--seconds") seconds = std::clamp(v, 2, 600);
-    if (a == "--cell-clients") cell_clients = std::clamp(v, 0, 50);
-    if (a == "--mill-clients") mill_clients = std::clamp(v, 0, 50);
-  }
-  if (std::getenv("CYCLONEDDS_URI") == nullptr) {
-    ::setenv("CYCLONEDDS_URI", "file://" SMC_DDS_PROFILE_PATH, 1);
-  }
+// One measurement over `dds` (plain DDS, or DDS Security with the
+// dashboard and the echo on their own identities); returns the cell-view
+// clients' latencies (ms).
+static std::vector<double> measure(const smc::test::SecureDds& dds, int mills, int seconds,
+                                   int cell_clients, int mill_clients) {
   const std::string partition = smc::test::unique_partition("bench-dashboard");
   const uint16_t port = free_port();
-  smc::test::ChildProcess dash({smc::test::bin_path("smc-dashboard"), "--http",
-                                "127.0.0.1:" + std::to_string(port), "--partition", partition,
-                                "--log-level", "warn"});
+  smc::test::ChildProcess dash(dds.child(
+      {smc::test::bin_path("smc-dashboard"), "--http", "127.0.0.1:" + std::to_string(port),
+       "--domain", std::to_string(dds.domain()), "--partition", partition, "--log-level", "warn"},
+      "dashboard"));
   const std::string url = "http://127.0.0.1:" + std::to_string(port) + "/";
   if (!dash.wait_for_line("smc-dashboard: listening on " + url)) {
     std::fprintf(stderr, "smc-dashboard did not start\n");
-    return 1;
+    std::exit(1);
   }
 
-  tr::Participant participant(tr::ParticipantOptions{0, {}, partition});
+  tr::Participant participant(dds.participant(partition));
   tr::Topic<smc_data_ForceSummary> summary_topic(participant);
   tr::Topic<smc_data_ForceBatch> batch_topic(participant);
   tr::Topic<smc_data_SupervisorSituation> situation_topic(participant);
@@ -167,13 +161,15 @@ int main(int argc, char** argv) {
   // Baseline: DDS alone, through the echo process (partition E.req -> E.rep).
   const std::string echo_partition = partition + "-echo";
   smc::test::ChildProcess echo(
-      {smc::test::bin_path("smc-transport-echo"), "--partition", echo_partition, "--idle-s", "30"});
+      dds.child({smc::test::bin_path("smc-transport-echo"), "--partition", echo_partition,
+                 "--domain", std::to_string(dds.domain()), "--idle-s", "30"},
+                "cell"));
   if (!echo.wait_for_line("ready")) {
     std::fprintf(stderr, "smc-transport-echo did not start (build the tests)\n");
-    return 1;
+    std::exit(1);
   }
-  tr::Participant req_participant(tr::ParticipantOptions{0, {}, echo_partition + ".req"});
-  tr::Participant base_participant(tr::ParticipantOptions{0, {}, echo_partition + ".rep"});
+  tr::Participant req_participant(dds.participant(echo_partition + ".req"));
+  tr::Participant base_participant(dds.participant(echo_partition + ".rep"));
   tr::Topic<smc_data_ForceSummary> req_topic(req_participant);
   tr::Writer<smc_data_ForceSummary> req_writer(req_topic);
   tr::Topic<smc_data_ForceSummary> base_topic(base_participant);
@@ -300,9 +296,9 @@ int main(int argc, char** argv) {
   }
   const double expected_per_cell_client = static_cast<double>(pub1 - pub0);
   std::printf(
-      "smc-bench-dashboard: %d mills x 25 rev/s (summary + 80-sample batch each), %d s, "
+      "smc-bench-dashboard, %s: %d mills x 25 rev/s (summary + 80-sample batch each), %d s, "
       "%d cell-view + %d mill-view stream clients\n",
-      mills, seconds, cell_clients, mill_clients);
+      dds.name(), mills, seconds, cell_clients, mill_clients);
   std::printf("%-44s %8s %8s %8s %8s\n", "force summary: write -> arrival", "n", "p50 ms", "p99 ms",
               "max ms");
   auto row = [](const char* name, const std::vector<double>& v) {
@@ -324,5 +320,33 @@ int main(int argc, char** argv) {
   std::printf("dashboard CPU: %.1f %% of one core (%.2f s over %.1f s)\n",
               100.0 * (cpu1 - cpu0) / wall, cpu1 - cpu0, wall);
   std::printf("dashboard /api/stats: %s\n", stats_body.substr(0, 400).c_str());
+  return cell_all;
+}
+
+int main(int argc, char** argv) {
+  int mills = 10;
+  int seconds = 10;
+  int cell_clients = 2;
+  int mill_clients = 2;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    const int v = std::atoi(argv[i + 1]);
+    if (a == "--mills") mills = std::clamp(v, 1, 50);
+    if (a == "--seconds") seconds = std::clamp(v, 2, 600);
+    if (a == "--cell-clients") cell_clients = std::clamp(v, 0, 50);
+    if (a == "--mill-clients") mill_clients = std::clamp(v, 0, 50);
+  }
+  if (std::getenv("CYCLONEDDS_URI") == nullptr) {
+    ::setenv("CYCLONEDDS_URI", "file://" SMC_DDS_PROFILE_PATH, 1);
+  }
+  const smc::test::SecureDds plain;
+  const smc::test::SecureDds secure(7, {});
+  const auto p = measure(plain, mills, seconds, cell_clients, mill_clients);
+  const auto q = measure(secure, mills, seconds, cell_clients, mill_clients);
+  std::printf(
+      "DDS Security beside plain DDS, cell-view stream: p50 %+.3f ms, p99 %+.3f ms "
+      "(%.3f -> %.3f, %.3f -> %.3f)\n",
+      percentile(q, 0.5) - percentile(p, 0.5), percentile(q, 0.99) - percentile(p, 0.99),
+      percentile(p, 0.5), percentile(q, 0.5), percentile(p, 0.99), percentile(q, 0.99));
   return 0;
 }
