@@ -31,6 +31,7 @@ struct Node {
   SourceLocation where;
   int a = -1;  // operands (node indices)
   int b = -1;
+  int depth = 1;  // of the subtree rooted here (bounded by the parser)
 };
 
 struct Ast {

@@ -2,6 +2,7 @@
 // statement is one line (a trailing '\' continues it); a syntax error is
 // recorded and parsing resumes on the next line.
 
+#include <algorithm>
 #include <limits>
 #include <utility>
 
@@ -278,10 +279,44 @@ class Parser {
     return s;
   }
 
+  // Bounds that keep every recursive walk of an expression (this parser,
+  // the checks, the compiler, the printer) well inside the stack, whatever
+  // the text: parentheses, '!' and '->' nested at most kMaxNesting deep, and
+  // a tree at most kMaxDepth operators deep (a chain "a & b & ..." is one
+  // level per '&').
+  static constexpr int kMaxNesting = 100;
+  static constexpr int kMaxDepth = 500;
+
   int add(Node n) {
+    for (const int child : {n.a, n.b}) {
+      if (child >= 0)
+        n.depth = std::max(n.depth, ast_->nodes[static_cast<std::size_t>(child)].depth + 1);
+    }
+    if (n.depth > kMaxDepth) {
+      throw SyntaxError{n.where, "expression more than " + std::to_string(kMaxDepth) +
+                                     " operators deep; split it (e.g. into named conditions)"};
+    }
     ast_->nodes.push_back(n);
     return static_cast<int>(ast_->nodes.size() - 1);
   }
+
+  // One more level of nesting for the parser's own recursion.
+  class Nest {
+   public:
+    Nest(Parser& p, SourceLocation where) : p_(p) {
+      if (++p_.nesting_ > kMaxNesting) {
+        --p_.nesting_;
+        throw SyntaxError{where, "expression nested more than " + std::to_string(kMaxNesting) +
+                                     " levels deep (parentheses, '!', '->'); split it"};
+      }
+    }
+    ~Nest() { --p_.nesting_; }
+    Nest(const Nest&) = delete;
+    Nest& operator=(const Nest&) = delete;
+
+   private:
+    Parser& p_;
+  };
 
   bool starts_operand() const {
     switch (peek().kind) {
@@ -307,6 +342,7 @@ class Parser {
                         "'next' is allowed only in an invariant, as CONDITION -> next "
                         "CONCLUSION at its top level"};
     const Token& op = take();
+    const Nest nest(*this, op.where);
     const int rhs = implication();
     return add({.kind = Node::Kind::kImplies, .where = op.where, .a = lhs, .b = rhs});
   }
@@ -349,6 +385,7 @@ class Parser {
   int unary() {
     if (at(Tok::kNot)) {
       const Token& op = take();
+      const Nest nest(*this, op.where);
       const int a = unary();
       return add({.kind = Node::Kind::kNot, .where = op.where, .a = a});
     }
@@ -384,6 +421,7 @@ class Parser {
                     at(Tok::kLParen));
       case Tok::kLParen: {
         take();
+        const Nest nest(*this, t.where);
         const int inner = implication();
         if (!at(Tok::kRParen))
           fail("')' to close the '(' at " + std::to_string(t.where.line) + ":" +
@@ -417,6 +455,7 @@ class Parser {
   const std::vector<Token>& t_;
   std::vector<LexError>& errors_;
   std::size_t i_ = 0;
+  int nesting_ = 0;
   Draft d_;
   Ast* ast_ = nullptr;
 };

@@ -192,6 +192,37 @@ void expect_errors(const std::string& text, const std::vector<Expected>& expecte
   }
 }
 
+// Found by fuzz_grafcet: 4,000 nested '(' overflowed the parser's stack.
+// Nesting and depth are bounded; within the bounds an expression parses and
+// evaluates as written.
+TEST(GrafcetParserErrors, ExpressionsNestedTooDeepAreRefusedNotAStackOverflow) {
+  const auto receptivity_errors = [](const std::string& r) {
+    const ParseResult res = parse(with_receptivity(r), "deep.grafcet");
+    std::string all;
+    for (const Diagnostic& d : res.errors) all += d.str() + "\n";
+    return all;
+  };
+  EXPECT_NE(receptivity_errors(std::string(4000, '(') + "a" + std::string(4000, ')'))
+                .find("nested more than 100 levels deep"),
+            std::string::npos);
+  EXPECT_NE(receptivity_errors(std::string(4000, '!') + "a").find("nested more than 100"),
+            std::string::npos);
+  std::string chain = "a";
+  for (int i = 0; i < 600; ++i) chain += " & b";
+  EXPECT_NE(receptivity_errors(chain).find("more than 500 operators deep"), std::string::npos);
+  std::string primes = "a" + std::string(600, '\'');
+  EXPECT_NE(receptivity_errors(primes).find("more than 500 operators deep"), std::string::npos);
+
+  // At the bounds: accepted, and evaluated as written (100 '(' around a & b;
+  // 99 '!' = one '!'; a chain of 400 '&').
+  const auto truth = [](const std::string& r) { return truth_table(r); };
+  EXPECT_EQ(truth(std::string(100, '(') + "a & b" + std::string(100, ')')), truth("a & b"));
+  EXPECT_EQ(truth(std::string(99, '!') + "a"), truth("!a"));
+  std::string long_chain = "a";
+  for (int i = 0; i < 400; ++i) long_chain += " & b";
+  EXPECT_EQ(truth(long_chain), truth("a & b"));
+}
+
 TEST(GrafcetParserErrors, EveryErrorOfAFileIsReportedWithItsPlace) {
   expect_errors(
       "input a, b\n"                             // 1
