@@ -19,6 +19,7 @@
 #include <optional>
 #include <random>
 #include <thread>
+#include <utility>
 
 #include "child_process.hpp"
 #include "smc/cell/store/store.hpp"
@@ -74,10 +75,32 @@ class Cell : public ::testing::Test {
 
   static std::string bin(const std::string& name) { return smc::test::bin_path(name); }
 
-  void start_cell() {
-    cell_.emplace(std::vector<std::string>{bin("smc-cell"), "--log-level", "warn", "serve", "--db",
-                                           db_, "--partition", partition_, "--edge-grace-ms",
-                                           "1500"});
+  // `env` (VAR=VALUE) for the cell alone; with `log`, its log (at info)
+  // goes to that file.
+  void start_cell(const std::string& env = {}, const std::string& log = {}) {
+    std::vector<std::string> argv{bin("smc-cell"), "--log-level", log.empty() ? "warn" : "info",
+                                  "serve",         "--db",        db_,
+                                  "--partition",   partition_,    "--edge-grace-ms",
+                                  "1500"};
+    if (!env.empty() || !log.empty()) {
+      argv.insert(argv.begin(),
+                  {"/bin/sh", "-c",
+                   "exec /usr/bin/env " + (env.empty() ? std::string() : "'" + env + "' ") +
+                       "\"$0\" \"$@\"" + (log.empty() ? std::string() : " 2>'" + log + "'")});
+    }
+    cell_.emplace(argv);
+  }
+  // The cell, both mills, and a transfer-line and a job-shop job running on
+  // them; returns their ids.
+  std::pair<std::string, std::string> two_jobs_running() {
+    if (!cell_) start_cell();
+    start_edge("mill-1");
+    start_edge("mill-2");
+    const std::string tl = submit("cell/jobs/transfer_line.textproto");
+    const std::string js = submit("cell/jobs/job_shop.json");
+    EXPECT_TRUE(wait_jobs(
+        {tl, js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+    return {tl, js};
   }
   void start_edge(const std::string& machine,
                   const std::string& mill_model = "cell/models/paper_face_mill.textproto",
@@ -488,13 +511,8 @@ TEST_F(Cell, PartShowGivesItsModelsTheChoiceAndWhy) {
 }
 
 TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {
-  start_cell();
-  start_edge("mill-1");
-  start_edge("mill-2");
-  const std::string tl = submit("cell/jobs/transfer_line.textproto");
-  const std::string js = submit("cell/jobs/job_shop.json");
-  ASSERT_TRUE(wait_jobs(
-      {tl, js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+  const auto [tl, js] = two_jobs_running();
+  ASSERT_FALSE(HasFailure());
   cell_->kill(SIGKILL);
   cell_->wait();
   cell_.reset();
@@ -520,18 +538,11 @@ TEST_F(Cell, KilledCellResumesAndNothingRunsTwice) {
 // and carries on: every job done, none run twice.
 TEST_F(Cell, ACellFrozenPastItsLeaseRejoinsAndNothingRunsTwice) {
   const std::string log = (dir_ / "cell.log").string();
-  const std::string uri = std::string("CYCLONEDDS_URI=file://") + SMC_DDS_PROFILE_PATH +
-                          ",<Discovery><LeaseDuration>1s</LeaseDuration></Discovery>";
-  cell_.emplace(std::vector<std::string>{
-      "/bin/sh", "-c", "exec /usr/bin/env '" + uri + "' \"$0\" \"$@\" 2>'" + log + "'",
-      bin("smc-cell"), "--log-level", "info", "serve", "--db", db_, "--partition", partition_,
-      "--edge-grace-ms", "1500"});
-  start_edge("mill-1");
-  start_edge("mill-2");
-  const std::string tl = submit("cell/jobs/transfer_line.textproto");
-  const std::string js = submit("cell/jobs/job_shop.json");
-  ASSERT_TRUE(wait_jobs(
-      {tl, js}, [](const store::Job& j) { return j.state == cfg::JOB_RUNNING; }, 60s));
+  start_cell(std::string("CYCLONEDDS_URI=file://") + SMC_DDS_PROFILE_PATH +
+                 ",<Discovery><LeaseDuration>1s</LeaseDuration></Discovery>",
+             log);
+  const auto [tl, js] = two_jobs_running();
+  ASSERT_FALSE(HasFailure());
   cell_->kill(SIGSTOP);
   std::this_thread::sleep_for(2s);  // the fault itself: frozen for twice the lease
   cell_->kill(SIGCONT);
