@@ -1,10 +1,15 @@
 #include "smc/transport/endpoint.hpp"
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
+#include <unordered_map>
 
 #include "qos_apply.hpp"
 #include "smc/transport/participant.hpp"
@@ -90,16 +95,96 @@ bool WriterBase::wait_for_readers(uint32_t n, std::chrono::nanoseconds timeout) 
   return poll_until(timeout, [&] { return publication_matched().current_count >= n; });
 }
 
+struct ReaderBase::Origins {
+  std::string cell;  // the cell partition
+  std::mutex mu;
+  std::unordered_map<uint64_t, std::string> by_writer;  // publication handle -> machine
+
+  // Records every writer matched now and not yet known.
+  void record_matched(dds_entity_t reader) {
+    std::array<dds_instance_handle_t, 64> handles{};
+    const dds_return_t n = dds_get_matched_publications(reader, handles.data(), handles.size());
+    for (dds_return_t i = 0; i < std::min<dds_return_t>(n, 64); ++i) {
+      {
+        std::lock_guard lock(mu);
+        if (by_writer.count(handles[static_cast<size_t>(i)]) != 0) continue;
+      }
+      record(reader, handles[static_cast<size_t>(i)]);
+    }
+  }
+
+  // Looks a matched writer's partition up and records its machine; false
+  // when the writer is not matched (any more).
+  bool record(dds_entity_t reader, uint64_t handle) {
+    dds_builtintopic_endpoint_t* ep = dds_get_matched_publication_data(reader, handle);
+    if (ep == nullptr) return false;
+    std::string machine;
+    uint32_t n = 0;
+    char** names = nullptr;
+    if (ep->qos != nullptr && dds_qget_partition(ep->qos, &n, &names)) {
+      for (uint32_t k = 0; k < n; ++k) {
+        std::string m = machine_of_partition(cell, names[k]);
+        // In two machines' partitions at once: nobody's.
+        if (!m.empty()) machine = machine.empty() ? m : std::string("?");
+        dds_free(names[k]);
+      }
+      dds_free(names);
+    }
+    dds_builtintopic_free_endpoint(ep);
+    std::lock_guard lock(mu);
+    // Writers come and go (every edge restart brings new ones): forget them
+    // all now and then rather than keep every one ever seen.
+    if (by_writer.size() >= 4096) by_writer.clear();
+    by_writer.emplace(handle, std::move(machine));
+    return true;
+  }
+
+  // The machine of a writer, or nullopt for one never seen matched.
+  std::optional<std::string> machine_of(dds_entity_t reader, uint64_t handle) {
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      {
+        std::lock_guard lock(mu);
+        auto it = by_writer.find(handle);
+        if (it != by_writer.end()) return it->second;
+      }
+      if (attempt == 0 && !record(reader, handle)) break;
+    }
+    return std::nullopt;
+  }
+};
+
+namespace {
+// A writer matched: its partition is recorded at once, while it can still
+// be looked up.
+void on_subscription_matched(dds_entity_t reader, const dds_subscription_matched_status_t status,
+                             void* arg) {
+  if (status.current_count_change > 0) {
+    static_cast<ReaderBase::Origins*>(arg)->record_matched(reader);
+  }
+}
+}  // namespace
+
 ReaderBase::ReaderBase(TopicBase& topic, const QosProfile& qos, MachineOf machine_of)
-    : topic_(topic.name()),
-      cell_(topic.participant().options().partition),
-      machine_of_(machine_of) {
+    : topic_(topic.name()), machine_of_(machine_of) {
   detail::Qos q;
   detail::apply(qos, q.get());
-  entity_ = Entity(detail::check(
-      dds_create_reader(topic.participant().subscriber(), topic.handle(), q.get(), nullptr),
-      "dds_create_reader", topic.name()));
+  dds_listener_t* listener = nullptr;
+  if (machine_of_ != nullptr) {
+    origins_ = std::make_unique<Origins>();
+    origins_->cell = topic.participant().options().partition;
+    listener = dds_create_listener(origins_.get());
+    dds_lset_subscription_matched(listener, &on_subscription_matched);
+  }
+  const dds_entity_t r =
+      dds_create_reader(topic.participant().subscriber(), topic.handle(), q.get(), listener);
+  if (listener != nullptr) dds_delete_listener(listener);
+  entity_ = Entity(detail::check(r, "dds_create_reader", topic.name()));
+  // Writers matched while the reader was being made.
+  if (origins_) origins_->record_matched(entity_.handle());
 }
+
+ReaderBase::~ReaderBase() = default;
+ReaderBase::ReaderBase(ReaderBase&&) noexcept = default;
 
 size_t ReaderBase::collect(const RawVisitor& visit, size_t max, bool take) {
   constexpr size_t kChunk = 64;
@@ -124,20 +209,20 @@ size_t ReaderBase::collect(const RawVisitor& visit, size_t max, bool take) {
         info.source_timestamp_ns = infos[i].source_timestamp;
         info.publication_handle = infos[i].publication_handle;
         if (machine_of_ != nullptr && buf[i] != nullptr) {
-          // A writer no longer matched has an unknown partition: its data
+          // A writer never seen matched has an unknown partition: its data
           // is refused; an instance-state change (no data) passes.
-          const std::string* origin = writer_machine(info.publication_handle);
+          const std::optional<std::string> origin =
+              origins_->machine_of(entity_.handle(), info.publication_handle);
           const char* key = machine_of_(buf[i]);
           const char* about = key != nullptr ? key : "";
-          const bool wrong = origin == nullptr
-                                 ? info.valid_data
-                                 : !origin->empty() && std::strcmp(origin->c_str(), about) != 0;
+          const bool wrong = !origin ? info.valid_data
+                                     : !origin->empty() && std::strcmp(origin->c_str(), about) != 0;
           if (wrong) {
             if (refused_++ == 0 || refused_ % 1000 == 0) {
               refusal_handler.load()(
                   "refused on " + topic_ + ": a sample about machine '" + about + "' from " +
-                  (origin == nullptr ? std::string("a writer no longer matched")
-                                     : "a writer in machine '" + *origin + "''s partition") +
+                  (!origin ? std::string("a writer never seen matched")
+                           : "a writer in machine '" + *origin + "''s partition") +
                   " (" + std::to_string(refused_) + " so far)");
             }
             continue;
@@ -154,31 +239,6 @@ size_t ReaderBase::collect(const RawVisitor& visit, size_t max, bool take) {
     if (count < want || !take) break;  // read() marks samples read; one pass is enough
   }
   return total;
-}
-
-const std::string* ReaderBase::writer_machine(uint64_t publication_handle) {
-  auto it = writers_.find(publication_handle);
-  if (it != writers_.end()) return &it->second;
-  dds_builtintopic_endpoint_t* ep =
-      dds_get_matched_publication_data(entity_.handle(), publication_handle);
-  if (ep == nullptr) return nullptr;  // not matched (any more): not cached
-  // Writers come and go (every edge restart brings new ones): forget them
-  // all now and then rather than keep every one ever seen.
-  if (writers_.size() >= 4096) writers_.clear();
-  std::string machine;
-  uint32_t n = 0;
-  char** names = nullptr;
-  if (ep->qos != nullptr && dds_qget_partition(ep->qos, &n, &names)) {
-    for (uint32_t k = 0; k < n; ++k) {
-      std::string m = machine_of_partition(cell_, names[k]);
-      // In two machines' partitions at once: nobody's.
-      if (!m.empty()) machine = machine.empty() ? m : std::string("?");
-      dds_free(names[k]);
-    }
-    dds_free(names);
-  }
-  dds_builtintopic_free_endpoint(ep);
-  return &writers_.emplace(publication_handle, std::move(machine)).first->second;
 }
 
 size_t ReaderBase::take_raw(const RawVisitor& visit, size_t max) {

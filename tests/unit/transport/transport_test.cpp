@@ -489,6 +489,43 @@ TEST(MachinePartitions, AMachinesWriterPosingAsAnotherMachineIsRefusedAndReporte
   EXPECT_NE(refusals[0].find("machine 'mill-1''s partition"), std::string::npos) << refusals[0];
 }
 
+// A writer's partition is recorded when it matches: samples taken after the
+// writer has gone (an edge's last progress, then its exit) are still judged
+// by where they were written, in both directions.
+TEST(MachinePartitions, SamplesTakenAfterTheirWriterHasGoneAreJudgedByItsPartition) {
+  const std::string partition = smc::test::unique_partition("gone");
+  Participant cell({.partition = partition});
+  Topic<smc_data_SupervisorSituation> cell_topic(cell);
+  Reader<smc_data_SupervisorSituation> reader(cell_topic);
+  {
+    Participant mill1({.partition = partition, .machine = "mill-1"});
+    Topic<smc_data_SupervisorSituation> mill_topic(mill1);
+    Writer<smc_data_SupervisorSituation> writer(mill_topic);
+    ASSERT_TRUE(writer.wait_for_readers(1, 10s));
+    smc_data_SupervisorSituation s{};
+    set_string(s.machine_id, "mill-1");
+    writer.write(s);
+    set_string(s.machine_id, "mill-2");  // posing
+    writer.write(s);
+  }  // the writer's participant is deleted before anything is taken
+  for (int i = 0; i < 5000 && reader.subscription_matched().current_count != 0; ++i) {
+    std::this_thread::sleep_for(2ms);
+  }
+  ASSERT_EQ(reader.subscription_matched().current_count, 0u) << "the writer did not go";
+  set_refusal_handler(&record_refusal);
+  std::vector<std::string> seen;
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (seen.empty() && std::chrono::steady_clock::now() < deadline) {
+    reader.take([&](const smc_data_SupervisorSituation& x, const SampleInfo& i) {
+      if (i.valid_data) seen.push_back(get_string(x.machine_id));
+    });
+    std::this_thread::sleep_for(2ms);
+  }
+  set_refusal_handler(nullptr);
+  EXPECT_EQ(seen, std::vector<std::string>{"mill-1"});
+  EXPECT_EQ(reader.refused(), 1u);
+}
+
 TEST(MachinePartitions, TheCellWritesIntoEachMachinesPartitionAndAMachineReadsOnlyItsOwn) {
   const std::string partition = smc::test::unique_partition("per-machine");
   Participant cell({.partition = partition});

@@ -5,9 +5,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "smc/transport/entity.hpp"
@@ -78,6 +78,11 @@ class ReaderBase {
   // type is not keyed by machine.
   using MachineOf = const char* (*)(const void* sample);
   ReaderBase(TopicBase& topic, const QosProfile& qos, MachineOf machine_of = nullptr);
+  ~ReaderBase();
+  ReaderBase(ReaderBase&&) noexcept;
+  // Not assignable: the reader's listener holds its origins until the
+  // reader is deleted.
+  ReaderBase& operator=(ReaderBase&&) = delete;
   EntityHandle handle() const noexcept { return entity_.handle(); }
   // Takes up to `max` samples (loaned, no copy) and visits each; returns the
   // number taken. The sample pointer is valid only during the visit.
@@ -92,16 +97,17 @@ class ReaderBase {
   // Y. Writers in the cell's partition are not checked.
   uint64_t refused() const noexcept { return refused_; }
 
+  // The machine whose partition each writer publishes in ("" for the
+  // cell's partition), recorded when it matches (a listener), so that its
+  // samples are judged by it even when taken after the writer has gone.
+  struct Origins;
+
  private:
   size_t collect(const RawVisitor& visit, size_t max, bool take);
-  // The machine whose partition a matched writer publishes in ("" for the
-  // cell's partition; null for a writer not matched); looked up once per
-  // writer.
-  const std::string* writer_machine(uint64_t publication_handle);
+  std::unique_ptr<Origins> origins_;  // before entity_: outlives the reader's listener
   Entity entity_;
-  std::string topic_, cell_;
+  std::string topic_;
   MachineOf machine_of_ = nullptr;
-  std::unordered_map<uint64_t, std::string> writers_;
   uint64_t refused_ = 0;
 };
 
