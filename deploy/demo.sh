@@ -143,7 +143,7 @@ jp=$("$bin/smc-cell" job submit "$plus_job" --db "$run/cell.db" | awk '{print $1
 "$bin/smc-cell" watch "$tl" "$js" "$jp" --db "$run/cell.db" --interval 3 --timeout 600
 
 echo
-grep -hE "chatter|candidate force model" "$run/cell.log" | sed 's/^/  /' || true
+grep -hE "chatter|candidate force model|validated|promoted" "$run/cell.log" | sed 's/^/  /' || true
 if [[ $keep -eq 1 ]]; then
   echo "demo: the cell keeps running; Ctrl-C to stop"
   wait

@@ -20,6 +20,7 @@
 
 #include "smc/cell/candidates.hpp"
 #include "smc/cell/dispatch.hpp"
+#include "smc/cell/learning.hpp"
 #include "smc/cell/planner.hpp"
 #include "smc/cell/store/catalog_docs.hpp"
 #include "smc/cell/store/store.hpp"
@@ -175,6 +176,7 @@ struct CellService::Impl {
   std::map<std::string, Mill> mills;
   std::map<std::string, Progress> progress;                             // by job id
   std::map<std::string, std::vector<machining::ForceSample>> learning;  // by job id
+  LearningPolicy policy;
   // Stability evidence: per machine its latest revolution and the job it
   // cuts; per job the chatter-free cuts seen (by speed and depth) and the
   // depths at which it chattered.
@@ -187,11 +189,14 @@ struct CellService::Impl {
     std::vector<std::pair<double, double>> chatter;     // (rpm, depth)
   };
   std::map<std::string, smc_data_ForceSummary> last_summary;  // by machine
-  std::map<std::string, std::string> cutting;                 // machine -> job
-  std::map<std::string, JobEvidence> evidence;                // by job id
-  std::set<std::string> chatter_seen;                         // "<machine>#<event id>"
-  std::set<std::string> retired;                              // machines that take no new jobs
-  std::map<std::string, std::string> out_on;  // machine -> job whose assignment was sent
+  // The feed per tooth of each machine's last revolution cut at a feed: the
+  // revolution a detector decides on is often held already (module A).
+  std::map<std::string, double> last_cut_feed;
+  std::map<std::string, std::string> cutting;   // machine -> job
+  std::map<std::string, JobEvidence> evidence;  // by job id
+  std::set<std::string> chatter_seen;           // "<machine>#<event id>"
+  std::set<std::string> retired;                // machines that take no new jobs
+  std::map<std::string, std::string> out_on;    // machine -> job whose assignment was sent
   int64_t data_version = -1;
   // Frozen longer than this: peers may have dropped this participant (half
   // its lease, which is how long they keep it after its last message).
@@ -595,13 +600,27 @@ struct CellService::Impl {
               // F_ref as the edge computes it (services/supervision).
               const auto& pl = *cur->plan;
               const auto m = db.machine(cur->machine_id);
-              const double ref =
+              double ref =
                   pl.operation().force_reference_n() > 0
                       ? pl.operation().force_reference_n()
                       : smc::supervision::force_reference_n(m ? m->max_spindle_power_w : 0,
                                                             pl.operation().cutter_radius_mm(),
                                                             pl.program().passes(0).spindle_rpm(),
                                                             pl.operation().force_safety_factor());
+              // SMC I holds each pass at its own F_ref, planned from the
+              // models for the machine's power: the overshoot is over the
+              // highest of them, as the edge sent it.
+              if (cur->variant == cfg::SMC_I && m) {
+                try {
+                  const auto sent = Planner::for_machine(pl, *m, "overshoot");
+                  double highest = 0;
+                  for (const auto& pass : sent.program().passes())
+                    highest = std::max(highest, pass.force_reference_n());
+                  if (highest > 0) ref = highest;
+                } catch (const std::exception& e) {
+                  spdlog::warn("job {}: overshoot against P_max / V: {}", job_id, e.what());
+                }
+              }
               r.set_force_reference_n(ref);
               if (ref > 0)
                 r.set_overshoot_pct(100.0 * (static_cast<double>(p.peak_force_n) - ref) / ref);
@@ -702,6 +721,9 @@ struct CellService::Impl {
       reason += "; the plan was made chatter-free from models " + (ids.empty() ? "(none)" : ids) +
                 ", so they are marked suspect and later jobs for part " + j->spec.part_id() +
                 " are planned without them";
+      db.record_catalog_event(
+          "part", j->spec.part_id(), "demoted", "cell",
+          "job " + j->id + ": " + why + "; its models " + ids + " are marked suspect");
       spdlog::warn("job {}: models {} marked suspect", j->id, ids);
     }
     db.note_event(j->id, reason);
@@ -728,7 +750,9 @@ struct CellService::Impl {
     store::StabilityEvidence e = evidence_for(j);
     e.spindle_rpm = it->second.spindle_rpm;
     e.depth_mm = it->second.depth_mm;
-    e.feed_per_tooth_mm = it->second.feed_per_tooth_mm;
+    const auto feed = last_cut_feed.find(machine);
+    e.feed_per_tooth_mm =
+        feed != last_cut_feed.end() ? feed->second : double{it->second.feed_per_tooth_mm};
     e.chatter = true;
     e.frequency_hz = hz;
     db.add_stability_evidence(e);
@@ -751,7 +775,7 @@ struct CellService::Impl {
       store::StabilityEvidence e = evidence_for(j);
       e.spindle_rpm = c.rpm;
       e.depth_mm = c.depth_mm;
-      e.feed_per_tooth_mm = c.feed_per_tooth_mm;
+      e.feed_per_tooth_mm = c.feed_per_tooth_mm < 1e9 ? c.feed_per_tooth_mm : 0;
       e.revolutions = c.revolutions;
       db.add_stability_evidence(e);
     }
@@ -812,6 +836,7 @@ struct CellService::Impl {
       if (!info.valid_data) return;
       const std::string machine = get_string(s.machine_id);
       last_summary[machine] = s;
+      if (s.in_contact && s.feed_per_tooth_mm > 0) last_cut_feed[machine] = s.feed_per_tooth_mm;
       if (auto it = recording.find(machine); it != recording.end()) {
         store::JobRevolution r;
         r.t_s = static_cast<double>(s.machine_time_ns) * 1e-9;
@@ -836,7 +861,9 @@ struct CellService::Impl {
                   .stable[{std::lround(s.spindle_rpm), std::lround(1000.0 * double{s.depth_mm})}];
           c.rpm = s.spindle_rpm;
           c.depth_mm = s.depth_mm;
-          c.feed_per_tooth_mm = std::min(c.feed_per_tooth_mm, double{s.feed_per_tooth_mm});
+          // The lowest feed it was cut at (held revolutions cut nothing).
+          if (s.feed_per_tooth_mm > 0)
+            c.feed_per_tooth_mm = std::min(c.feed_per_tooth_mm, double{s.feed_per_tooth_mm});
           ++c.revolutions;
         }
       }
@@ -858,55 +885,233 @@ struct CellService::Impl {
     }
   }
 
-  // From an SMC II run's per-revolution data: a candidate force-process
-  // model (F_Y = K d^beta f^alpha) with its fit statistics, stored as not
-  // validated. Under force control F_Y sits at the reference, so only the
-  // trade-off between depth and feed is in the data: exponents it cannot
-  // identify (one depth; a narrow feed range) are held at the handbook values
-  // of the paper's eq. 1, and the note says so.
+  // What a finished job teaches the cell about its part (cell/README.md,
+  // "Learning and promotion"):
+  //  - every candidate force model of the part on that machine is checked on
+  //    the run's settled revolutions; one that predicts F_Y within the
+  //    policy's tolerance for its number of runs in a row is validated;
+  //  - when none predicted this run, a new candidate is fitted from it;
+  //  - every unvalidated milling model of the part on that machine is
+  //    checked against the stability limit its cuts bound at this speed:
+  //    validated when its limit lies between a clean cut and a chatter,
+  //    marked suspect when either contradicts it;
+  //  - when a job of the part would now get SMC I and this one did not, the
+  //    part is promoted: a note in the job's history and the part's.
   void learn(const store::Job& j) {
-    auto it = learning.find(j.id);
-    if (it == learning.end() || it->second.size() < 20) return;
-    const auto& samples = it->second;
-    double dmin = 1e9, dmax = 0, fmin = 1e9, fmax = 0;
+    std::vector<machining::ForceSample> samples;
+    if (auto it = learning.find(j.id); it != learning.end()) {
+      samples = std::move(it->second);
+      learning.erase(it);
+    }
+    const auto part = db.part(j.spec.part_id());
+    if (!part || j.machine_id.empty()) return;
+    const bool was_smc1 = j.variant == cfg::SMC_I;
+    bool predicted = false;
+    if (samples.size() >= policy.min_samples) {
+      for (const auto& m :
+           db.find_models(j.machine_id, j.spec.tool_id(), part->material_id, part->id)) {
+        if (m.kind != store::ModelKind::kForceProcess || m.part_id != part->id || m.validated ||
+            m.provenance != cfg::PROVENANCE_FITTED || !m.suspect_reason.empty())
+          continue;
+        predicted = check_force_model(j, m, samples) || predicted;
+      }
+      if (!predicted && opt.learn) fit_candidate(j, *part, samples);
+    }
+    check_milling_models(j, *part);
+    if (!was_smc1) note_promotion(j);
+  }
+
+  // One check of a candidate force model on a run; true when it passed.
+  bool check_force_model(const store::Job& j, const store::ProcessModel& m,
+                         const std::vector<machining::ForceSample>& samples) {
+    const double err = mean_abs_error_pct(machining::from_proto(m.force, "force_model"), samples);
+    const bool passed = std::isfinite(err) && err <= policy.within_pct;
+    char reason[200];
+    std::snprintf(reason, sizeof reason,
+                  "job %s: predicted F_Y of its %zu settled revolutions within %.1f %% (mean "
+                  "absolute error; the policy asks %.0f %%)",
+                  j.id.c_str(), samples.size(), err, policy.within_pct);
+    db.record_catalog_event("model", m.id, "checked", "cell", reason, passed ? "passed" : "failed");
+    spdlog::info("model {}: {} ({})", m.id, reason, passed ? "passed" : "failed");
+    if (!passed) return false;
+    const int in_a_row = passed_in_a_row(db.history("model", m.id));
+    if (in_a_row < policy.runs) return true;
+    std::string jobs;
+    for (const auto& e : db.history("model", m.id)) {
+      if (e.action == "checked" && e.detail == "passed")
+        jobs += (jobs.empty() ? "" : ", ") + e.reason.substr(4, e.reason.find(':') - 4);
+    }
+    const std::string why = "predicted F_Y of " + std::to_string(in_a_row) +
+                            " runs in a row within " + std::to_string(int(policy.within_pct)) +
+                            " % (jobs " + jobs + ")";
+    db.transaction([&] {
+      db.set_model_validated(m.id, true);
+      db.record_catalog_event("model", m.id, "validated", "cell", why);
+      db.note_event(j.id, "force model " + m.id + " validated: " + why);
+    });
+    spdlog::info("model {} validated: {}", m.id, why);
+    return true;
+  }
+
+  // A candidate force-process model (F_Y = K d^beta f^alpha) fitted from a
+  // run's settled revolutions, stored as not validated. Under force control
+  // F_Y sits at the reference: the settled revolutions lie along one force
+  // level (or one per pass), which fixes K for given exponents but not the
+  // exponents themselves. An exponent is held at the handbook value of the
+  // paper's eq. 1 when the data cannot fix it: one depth (or one feed), forces
+  // that span less than 1.5:1, or a 95 % interval wider than +/- 0.15 when
+  // fitted; the note says which, with K's 95 % interval.
+  void fit_candidate(const store::Job& j, const store::Part& part,
+                     const std::vector<machining::ForceSample>& samples) {
+    double dmin = 1e9, dmax = 0, fmin = 1e9, fmax = 0, force_min = 1e9, force_max = 0;
     for (const auto& s : samples) {
       dmin = std::min(dmin, s.depth_mm);
       dmax = std::max(dmax, s.depth_mm);
       fmin = std::min(fmin, s.feed_mm_per_tooth);
       fmax = std::max(fmax, s.feed_mm_per_tooth);
+      force_min = std::min(force_min, s.force_n);
+      force_max = std::max(force_max, s.force_n);
     }
     machining::FitOptions fo;
     std::string note =
         "fitted from " + std::to_string(samples.size()) + " revolutions of job " + j.id;
-    if (dmax < 1.2 * dmin) {
+    const bool one_level = force_max < 1.5 * force_min;
+    if (dmax < 1.2 * dmin || one_level) {
       fo.fixed_beta = 0.65;
-      note += "; beta held at 0.65 (one depth)";
+      note += dmax < 1.2 * dmin ? "; beta held at 0.65 (one depth)"
+                                : "; beta held at 0.65 (F_Y held at one level by the controller)";
     }
-    if (fmax < 1.5 * fmin) {
+    if (fmax < 1.5 * fmin || one_level) {
       fo.fixed_alpha = 0.63;
-      note += "; alpha held at 0.63 (feed range too narrow to identify it)";
+      note += fmax < 1.5 * fmin ? "; alpha held at 0.63 (feed range too narrow to identify it)"
+                                : "; alpha held at 0.63 (F_Y held at one level by the controller)";
+    }
+    if (!fo.fixed_beta || !fo.fixed_alpha) {
+      try {
+        const auto free = machining::fit_force_process(samples, fo);
+        if (free.fit && !fo.fixed_beta && 1.96 * free.fit->beta_stderr > 0.15) {
+          fo.fixed_beta = 0.65;
+          note += "; beta held at 0.65 (fitted, its 95 % interval was wider than +/- 0.15)";
+        }
+        if (free.fit && !fo.fixed_alpha && 1.96 * free.fit->alpha_stderr > 0.15) {
+          fo.fixed_alpha = 0.63;
+          note += "; alpha held at 0.63 (fitted, its 95 % interval was wider than +/- 0.15)";
+        }
+      } catch (const std::exception&) {
+        // refitted below with what it holds; that fit reports the error
+      }
     }
     try {
       const auto fit = machining::fit_force_process(samples, fo);
+      if (fit.fit) {
+        char ci[160];
+        std::snprintf(ci, sizeof ci, "; K %.3f +/- %.3f kN (95 %%)", fit.k_kn,
+                      1.96 * fit.fit->k_stderr);
+        note += ci;
+        if (!fo.fixed_beta) {
+          std::snprintf(ci, sizeof ci, ", beta %.2f +/- %.2f", fit.beta,
+                        1.96 * fit.fit->beta_stderr);
+          note += ci;
+        }
+        if (!fo.fixed_alpha) {
+          std::snprintf(ci, sizeof ci, ", alpha %.2f +/- %.2f", fit.alpha,
+                        1.96 * fit.fit->alpha_stderr);
+          note += ci;
+        }
+      }
       store::ProcessModel pm;
       pm.kind = store::ModelKind::kForceProcess;
       pm.machine_id = j.machine_id;
       pm.tool_id = j.spec.tool_id();
-      pm.material_id = db.part(j.spec.part_id())->material_id;
-      pm.part_id = j.spec.part_id();
+      pm.material_id = part.material_id;
+      pm.part_id = part.id;
       pm.provenance = cfg::PROVENANCE_FITTED;
       pm.validated = false;
       pm.force = machining::to_proto(fit);
       pm.fit = pm.force.fit();
       pm.note = note;
       const std::string id = db.add_model(pm);
+      db.note_event(j.id, "candidate force model " + id + " (" + note +
+                              "); validated once it predicts later runs");
       spdlog::info(
           "job {}: candidate force model {}: K={:.3f} kN beta={:.2f} alpha={:.2f}, R^2={:.3f} ({})",
           j.id, id, fit.k_kn, fit.beta, fit.alpha, fit.fit ? fit.fit->r_squared : 0.0, note);
     } catch (const std::exception& e) {
       spdlog::warn("job {}: no force model fitted: {}", j.id, e.what());
     }
-    learning.erase(it);
+  }
+
+  // Unvalidated milling models of the part on the job's machine, against
+  // the stability limit the part's cuts bound at the job's speed.
+  void check_milling_models(const store::Job& j, const store::Part& part) {
+    const auto tool = db.tool(j.spec.tool_id());
+    if (!tool) return;
+    const long rpm = std::lround(j.spec.spindle_rpm());
+    std::optional<StabilityBound> bound;
+    for (auto& b : stability_bounds(db.stability_evidence(part.id))) {
+      if (b.machine_id == j.machine_id && b.tool_id == tool->id && b.rpm == rpm) bound = b;
+    }
+    if (!bound || bound->disagrees()) return;
+    for (const auto& m : db.find_models(j.machine_id, tool->id, part.material_id, part.id)) {
+      if (m.kind != store::ModelKind::kMilling || m.part_id != part.id || m.validated ||
+          !m.suspect_reason.empty())
+        continue;
+      BoundCheck c;
+      try {
+        c = check_against(for_part(m, *tool, part), *bound);
+      } catch (const std::exception& e) {
+        spdlog::warn("model {}: not checked against the part's cuts: {}", m.id, e.what());
+        continue;
+      }
+      char what[240];
+      std::snprintf(what, sizeof what,
+                    "its critical depth at %ld rpm is %.2f mm at the clean cut's feed and %.2f mm "
+                    "at the chatter's; the part's cuts on %s bound the limit to (%.2f, %.2f] mm",
+                    rpm, c.critical_at_stable_mm, c.critical_at_chatter_mm, j.machine_id.c_str(),
+                    bound->stable_mm, bound->chatter_mm);
+      if (c.contradicted()) {
+        const std::string why = std::string("contradicted by the part's cuts: ") + what;
+        db.transaction([&] {
+          db.mark_model_suspect(m.id, why);
+          db.record_catalog_event("model", m.id, "suspected", "cell", why);
+          db.note_event(j.id, "milling model " + m.id + " marked suspect: " + why);
+        });
+        spdlog::warn("model {} marked suspect: {}", m.id, why);
+      } else if (c.brackets()) {
+        const std::string why = std::string("consistent with the part's cuts: ") + what;
+        db.transaction([&] {
+          db.set_model_validated(m.id, true);
+          db.record_catalog_event("model", m.id, "validated", "cell", why);
+          db.note_event(j.id, "milling model " + m.id + " validated: " + why);
+        });
+        spdlog::info("model {} validated: {}", m.id, why);
+      }
+    }
+  }
+
+  // The part is promoted when a job of it would now get SMC I on some
+  // machine and this one did not get it.
+  void note_promotion(const store::Job& j) {
+    store::Job next = j;
+    next.id = "next";
+    next.spec.clear_machine_id();
+    Selection sel;
+    try {
+      (void)bind_job(db, next, sel);
+    } catch (const std::exception&) {
+      return;
+    }
+    if (sel.variant != cfg::SMC_I) return;
+    const std::string why = "after job " + j.id + ", a job of part " + j.spec.part_id() +
+                            " gets SMC I on " + (sel.force ? sel.force->machine_id : "?") +
+                            ": force model " + (sel.force ? sel.force->id : "?") +
+                            " and milling model " + (sel.milling ? sel.milling->id : "?") +
+                            " are validated";
+    db.transaction([&] {
+      db.record_catalog_event("part", j.spec.part_id(), "promoted", "cell", why);
+      db.note_event(j.id, "part " + j.spec.part_id() + " promoted to SMC I: " + why);
+    });
+    spdlog::info("part {} promoted to SMC I: {}", j.spec.part_id(), why);
   }
 
   // -------------------------------------------------------------- loop --

@@ -314,7 +314,7 @@ SMC_CELL_COMMAND(model, 23) {
   });
 
   struct FitArgs {
-    std::string csv, base, id, on = "tool", db, out;
+    std::string csv, base, id, on = "tool", db, out, part, machine;
     int modes = 2;
   };
   auto f = std::make_shared<FitArgs>();
@@ -335,6 +335,10 @@ SMC_CELL_COMMAND(model, 23) {
   fit->add_option("--modes", f->modes, "At most this many modes per direction")
       ->capture_default_str()
       ->check(CLI::Range(1, 6));
+  fit->add_option("--part", f->part,
+                  "The part the model is for (default: the base's). A model made for a part\n"
+                  "the cell learns: its cuts validate it, or mark it suspect");
+  fit->add_option("--machine", f->machine, "The machine tapped (default: the base's)");
   fit->add_option("--out", f->out, "Write the document here (default: standard output)");
   add_db_option(fit, f->db);
   fit->callback([f] {
@@ -358,6 +362,20 @@ SMC_CELL_COMMAND(model, 23) {
     auto* m = doc.add_models();
     *m = *base;
     m->set_id(f->id);
+    if (!f->part.empty()) {
+      if (!s.part(f->part)) {
+        throw Failure(2, "--part " + f->part + ": no part of that id in " + s.path() +
+                             "; fix: see them with 'smc-cell catalog list part'");
+      }
+      m->set_part_id(f->part);
+    }
+    if (!f->machine.empty()) {
+      if (!s.machine(f->machine)) {
+        throw Failure(2, "--machine " + f->machine + ": no machine of that id in " + s.path() +
+                             "; fix: see them with 'smc-cell catalog list machine'");
+      }
+      m->set_machine_id(f->machine);
+    }
     m->set_provenance(smc::config::PROVENANCE_IDENTIFIED);
     m->set_validated(false);
     auto* st = m->mutable_milling()->mutable_structure();

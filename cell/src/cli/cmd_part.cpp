@@ -11,12 +11,13 @@
 #include <set>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include "registry.hpp"
 #include "smc/cell/candidates.hpp"
+#include "smc/cell/learning.hpp"
 #include "smc/cell/store/store.hpp"
-#include "smc/machining/model_proto.hpp"
-#include "smc/machining/tds.hpp"
+#include "smc/common/svg_plot.hpp"
 #include "smc_config.pb.h"
 
 namespace {
@@ -32,7 +33,7 @@ std::string num(double v) {
   return b;
 }
 
-void print_model(const store::ProcessModel& m) {
+void print_model(store::Store& db, const store::ProcessModel& m) {
   std::printf("    %-28s %-13s %-10s %s%s\n", m.id.c_str(),
               std::string(store::kind_name(m.kind)).c_str(),
               std::string(store::provenance_name(m.provenance)).c_str(),
@@ -54,97 +55,80 @@ void print_model(const store::ProcessModel& m) {
   }
   if (!m.suspect_reason.empty()) std::printf("      SUSPECT: %s\n", m.suspect_reason.c_str());
   if (!m.note.empty()) std::printf("      note: %s\n", m.note.c_str());
+  // What the cell's learning did with it: each check on a later run, and
+  // its validation or suspicion with the evidence.
+  const auto history = db.history("model", m.id);
+  for (const auto& e : history) {
+    if (e.action != "checked" && e.action != "validated" && e.action != "suspected") continue;
+    std::printf("      %s %s%s: %s\n", store::format_time(e.time_ms).c_str(), e.action.c_str(),
+                e.action == "checked" ? (" (" + e.detail + ")").c_str() : "", e.reason.c_str());
+  }
+  if (!m.validated && m.provenance == cfg::PROVENANCE_FITTED &&
+      m.kind == store::ModelKind::kForceProcess) {
+    const smc::cell::LearningPolicy policy;
+    std::printf("      validation: %d of %d runs in a row predicted within %.0f %%\n",
+                smc::cell::passed_in_a_row(history), policy.runs, policy.within_pct);
+  }
 }
 
 // The stability evidence of a part's cuts, per machine, tool and speed: the
 // deepest chatter-free cut and the shallowest chatter bound the limit; where
 // the machine has a milling model for the part, its time-domain critical
-// depth is checked against them.
+// depth is checked against them (the same check the cell makes after each
+// job, smc/cell/learning.hpp).
 void print_evidence(store::Store& db, const store::Part& p) {
   const auto ev = db.stability_evidence(p.id);
   std::printf("  stability evidence%s\n", ev.empty() ? ": none yet (every cut records it)" : "");
-  struct Bound {
-    double stable = 0, chatter = 1e9, hz = 0;
-    double stable_feed = 0, chatter_feed = 0;  // feed per tooth of those two cuts
-    std::uint32_t revolutions = 0;
-    std::set<std::string> jobs;
-  };
-  std::map<std::tuple<std::string, std::string, long>, Bound> bounds;
-  for (const auto& e : ev) {
-    auto& b = bounds[{e.machine_id, e.tool_id, std::lround(e.spindle_rpm)}];
-    if (e.chatter && e.depth_mm < b.chatter) {
-      b.chatter = e.depth_mm;
-      b.hz = e.frequency_hz;
-      b.chatter_feed = e.feed_per_tooth_mm;
-    } else if (!e.chatter) {
-      if (e.depth_mm > b.stable) b.stable_feed = e.feed_per_tooth_mm;
-      b.stable = std::max(b.stable, e.depth_mm);
-      b.revolutions += e.revolutions;
-    }
-    b.jobs.insert(e.job_id);
-  }
-  for (const auto& [key, b] : bounds) {
-    const auto& [machine, tool, rpm] = key;
-    std::printf("   on %s, tool %s, at %ld rpm (%zu job%s):\n", machine.c_str(), tool.c_str(), rpm,
-                b.jobs.size(), b.jobs.size() == 1 ? "" : "s");
-    const bool has_chatter = b.chatter < 1e9;
-    if (b.stable > 0) {
-      std::printf("     cut without chatter to %.2f mm (%u revolutions)\n", b.stable,
+  for (const auto& b : smc::cell::stability_bounds(ev)) {
+    std::printf("   on %s, tool %s, at %ld rpm (%zu job%s):\n", b.machine_id.c_str(),
+                b.tool_id.c_str(), b.rpm, b.jobs.size(), b.jobs.size() == 1 ? "" : "s");
+    if (b.stable_mm > 0) {
+      std::printf("     cut without chatter to %.2f mm (%u revolutions)\n", b.stable_mm,
                   b.revolutions);
     }
-    if (has_chatter) {
-      std::printf("     chatter at %.2f mm%s\n", b.chatter,
-                  b.hz > 0 ? (" (" + std::to_string(std::lround(b.hz)) + " Hz)").c_str() : "");
+    if (b.has_chatter()) {
+      std::printf("     chatter at %.2f mm%s\n", b.chatter_mm,
+                  b.chatter_hz > 0
+                      ? (" (" + std::to_string(std::lround(b.chatter_hz)) + " Hz)").c_str()
+                      : "");
     }
-    if (has_chatter && b.stable >= b.chatter) {
+    if (b.disagrees()) {
       std::printf(
           "     the evidence disagrees with itself (stable deeper than a chatter): the "
           "cuts differed in width or feed, or the machine changed\n");
     } else {
-      std::printf("     so the stability limit lies %s\n",
-                  has_chatter
-                      ? (b.stable > 0 ? ("in (" + num(b.stable) + ", " + num(b.chatter) + "] mm")
-                                      : ("at or below " + num(b.chatter) + " mm"))
-                            .c_str()
-                      : ("above " + num(b.stable) + " mm").c_str());
+      std::printf(
+          "     so the stability limit lies %s\n",
+          b.has_chatter()
+              ? (b.stable_mm > 0 ? ("in (" + num(b.stable_mm) + ", " + num(b.chatter_mm) + "] mm")
+                                 : ("at or below " + num(b.chatter_mm) + " mm"))
+                    .c_str()
+              : ("above " + num(b.stable_mm) + " mm").c_str());
     }
-    // The machine's milling model for the part, against the evidence.
-    const auto t = db.tool(tool);
-    for (const auto& m : db.find_models(machine, tool, p.material_id, p.id)) {
-      if (m.kind != store::ModelKind::kMilling || m.retired_at_ms != 0 || !t) continue;
-      cfg::MillingModel mm = m.milling;
-      mm.mutable_cutter()->set_teeth(t->teeth);
-      mm.mutable_cutter()->set_radius_mm(t->radius_mm);
-      mm.mutable_cutter()->set_lead_angle_deg(t->lead_angle_deg);
-      mm.mutable_workpiece()->set_width_mm(p.width_mm);
-      mm.mutable_workpiece()->set_offset_mm(p.offset_mm);
-      mm.mutable_workpiece()->set_length_mm(p.length_mm);
-      // The model's limit at the feed of each bounding cut (with power-law
-      // pressures the critical depth falls with the feed).
+    // The machine's milling models for the part, against the evidence.
+    const auto t = db.tool(b.tool_id);
+    if (!t) continue;
+    for (const auto& m : db.find_models(b.machine_id, b.tool_id, p.material_id, p.id)) {
+      if (m.kind != store::ModelKind::kMilling || m.retired_at_ms != 0) continue;
       try {
-        const auto model = smc::machining::from_proto(mm, "milling_model");
-        auto limit = [&](double feed) {
-          const auto c = smc::machining::critical_depth_tds(model, static_cast<double>(rpm),
-                                                            feed > 0 ? feed : 0.1);
-          return c.bounded ? c.critical_depth_mm : 1e9;
+        const auto c = smc::cell::check_against(smc::cell::for_part(m, *t, p), b);
+        auto depth = [](double d) {
+          return d < smc::cell::BoundCheck::kUnbounded ? num(d) + " mm" : std::string("unbounded");
         };
-        auto depth = [](double d) { return d < 1e9 ? num(d) + " mm" : std::string("unbounded"); };
-        if (has_chatter) {
-          const double d = limit(b.chatter_feed);
+        if (b.has_chatter()) {
           std::printf(
               "     model %s: critical depth %s at the chattering cut's %.4f mm/tooth: %s\n",
-              m.id.c_str(), depth(d).c_str(), b.chatter_feed,
-              d > b.chatter + 1e-6
-                  ? ("CONTRADICTED: chatter at " + num(b.chatter) + " mm, below it").c_str()
+              m.id.c_str(), depth(c.critical_at_chatter_mm).c_str(), b.chatter_feed_mm,
+              c.contradicted_by_chatter
+                  ? ("CONTRADICTED: chatter at " + num(b.chatter_mm) + " mm, below it").c_str()
                   : "consistent with the chatter");
         }
-        if (b.stable > 0) {
-          const double d = limit(b.stable_feed);
+        if (b.stable_mm > 0) {
           std::printf(
               "     model %s: critical depth %s at the clean cut's %.4f mm/tooth: %s\n",
-              m.id.c_str(), depth(d).c_str(), b.stable_feed,
-              d < b.stable - 1e-6
-                  ? ("CONTRADICTED: " + num(b.stable) + " mm was cut without chatter").c_str()
+              m.id.c_str(), depth(c.critical_at_stable_mm).c_str(), b.stable_feed_mm,
+              c.contradicted_by_stable
+                  ? ("CONTRADICTED: " + num(b.stable_mm) + " mm was cut without chatter").c_str()
                   : "consistent with the clean cut");
         }
       } catch (const std::exception& e) {
@@ -154,13 +138,65 @@ void print_evidence(store::Store& db, const store::Part& p) {
   }
 }
 
+// The part's runs, oldest first: what each got and how it went.
+struct Run {
+  std::string job, state, variant, machine;
+  double cycle_s = NAN, overshoot_pct = NAN;
+  int chatter = -1, passes = -1;
+};
+
+std::vector<Run> runs_of(store::Store& db, const store::Part& p) {
+  std::vector<Run> out;
+  for (const auto& j : db.jobs({.with_documents = true})) {
+    if (j.spec.part_id() != p.id) continue;
+    Run r{j.id, std::string(store::state_name(j.state)),
+          std::string(store::variant_name(j.variant)), j.machine_id.empty() ? "-" : j.machine_id};
+    if (j.result) {
+      r.cycle_s = j.result->cycle_time_s();
+      if (j.result->force_reference_n() > 0) r.overshoot_pct = j.result->overshoot_pct();
+      r.chatter = static_cast<int>(j.result->chatter_events());
+      r.passes = static_cast<int>(j.result->passes_completed());
+    }
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+// Cycle time, overshoot and chatter events per run, with the runs that
+// were promoted to SMC I marked.
+void plot_runs(const std::vector<Run>& runs, const store::Part& p, const std::string& path) {
+  smc::plot::Figure fig("part " + p.id + ": its runs");
+  fig.x_axis().label = "run";
+  fig.y_axis().label = "cycle time (s) / overshoot (%) / chatter events x 10";
+  fig.y_axis().include_zero = true;
+  std::vector<double> n, cycle, overshoot, chatter;
+  std::string last_variant;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const auto& r = runs[i];
+    if (!std::isfinite(r.cycle_s)) continue;
+    const double k = static_cast<double>(i + 1);
+    n.push_back(k);
+    cycle.push_back(r.cycle_s);
+    overshoot.push_back(r.overshoot_pct);
+    chatter.push_back(10.0 * r.chatter);
+    if (!last_variant.empty() && r.variant != last_variant) fig.add_vertical(k - 0.5, r.variant);
+    last_variant = r.variant;
+  }
+  for (auto* s :
+       {&fig.add_line("cycle time (s)", n, cycle), &fig.add_line("overshoot (%)", n, overshoot),
+        &fig.add_line("chatter events x 10", n, chatter)}) {
+    s->style = smc::plot::Style::line_and_markers;
+  }
+  fig.write(path);
+}
+
 }  // namespace
 
 SMC_CELL_COMMAND(part, 24) {
   auto* part = app.add_subcommand("part", "Parts: one part with its models, choice and jobs");
   part->require_subcommand(1);
   struct Args {
-    std::string id, db;
+    std::string id, db, plot;
   };
   auto a = std::make_shared<Args>();
   auto* show = part->add_subcommand(
@@ -169,6 +205,9 @@ SMC_CELL_COMMAND(part, 24) {
       "suspicion, fit), the stability evidence of its cuts (and each milling model checked\n"
       "against it), what a job of it would get now and why, its jobs and its history");
   show->add_option("ID", a->id, "Part id")->required();
+  show->add_option("--plot", a->plot,
+                   "Also plot its runs (cycle time, overshoot, chatter events; the change\n"
+                   "of supervisor marked) to this SVG file");
   add_db_option(show, a->db);
   show->callback([a] {
     auto db = store::Store::open(a->db, store::OpenMode::kExisting);
@@ -189,7 +228,7 @@ SMC_CELL_COMMAND(part, 24) {
       if (m.retired_at_ms != 0) continue;
       const auto models = db.find_models(m.id, p->tool_id, p->material_id, p->id);
       std::printf("   on %s:%s\n", m.id.c_str(), models.empty() ? " none" : "");
-      for (const auto& pm : models) print_model(pm);
+      for (const auto& pm : models) print_model(db, pm);
     }
     // What the planner would choose for a job with the part's defaults, if
     // every machine's edge were up.
@@ -209,21 +248,29 @@ SMC_CELL_COMMAND(part, 24) {
                   sel.explanation.c_str());
     }
     print_evidence(db, *p);
-    std::printf("  jobs\n");
-    int jobs = 0;
-    for (const auto& j : db.jobs({.with_documents = true})) {
-      if (j.spec.part_id() != p->id) continue;
-      ++jobs;
-      std::printf("    %-12s %-11s %-7s %-8s %s\n", j.id.c_str(),
-                  std::string(store::state_name(j.state)).c_str(),
-                  std::string(store::variant_name(j.variant)).c_str(),
-                  j.machine_id.empty() ? "-" : j.machine_id.c_str(),
-                  j.result ? ("chatter events " + std::to_string(j.result->chatter_events()) +
-                              ", passes " + std::to_string(j.result->passes_completed()))
-                                 .c_str()
-                           : "");
+    const auto runs = runs_of(db, *p);
+    std::printf("  jobs%s\n", runs.empty() ? ": none" : "");
+    if (!runs.empty()) {
+      std::printf("    %-3s %-12s %-11s %-7s %-8s %9s %10s %8s %7s\n", "run", "job", "state",
+                  "variant", "machine", "cycle (s)", "overshoot", "chatter", "passes");
     }
-    if (jobs == 0) std::printf("    (none)\n");
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      const auto& r = runs[i];
+      auto f = [](double v, const char* unit) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.1f%s", v, unit);
+        return std::isfinite(v) ? std::string(b) : std::string("-");
+      };
+      std::printf("    %-3zu %-12s %-11s %-7s %-8s %9s %10s %8s %7s\n", i + 1, r.job.c_str(),
+                  r.state.c_str(), r.variant.c_str(), r.machine.c_str(), f(r.cycle_s, "").c_str(),
+                  f(r.overshoot_pct, " %").c_str(),
+                  r.chatter < 0 ? "-" : std::to_string(r.chatter).c_str(),
+                  r.passes < 0 ? "-" : std::to_string(r.passes).c_str());
+    }
+    if (!a->plot.empty()) {
+      plot_runs(runs, *p, a->plot);
+      std::printf("  plot of its runs: %s\n", a->plot.c_str());
+    }
     smc::cell::cli::print_history(db, "part", p->id);
   });
 }
