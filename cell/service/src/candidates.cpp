@@ -1,5 +1,6 @@
 #include "smc/cell/candidates.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace smc::cell {
@@ -8,12 +9,18 @@ std::vector<MachineModels> machine_candidates(
     store::Store& db, const store::Job& job, const store::Part& part,
     const std::function<bool(const std::string&)>& available) {
   std::vector<MachineModels> out;
+  const auto bounds = stability_bounds(db.stability_evidence(part.id));
   for (auto& m : db.machines()) {
     if (m.retired_at_ms != 0) continue;
     if (!job.spec.machine_id().empty() && m.id != job.spec.machine_id()) continue;
     MachineModels c;
     c.available = !available || available(m.id);
     c.models = db.find_models(m.id, job.spec.tool_id(), part.material_id, part.id);
+    for (const auto& b : bounds) {
+      if (b.machine_id == m.id && b.tool_id == job.spec.tool_id() &&
+          b.rpm == std::lround(job.spec.spindle_rpm()))
+        c.bound = b;
+    }
     c.machine = std::move(m);
     out.push_back(std::move(c));
   }

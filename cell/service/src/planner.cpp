@@ -90,14 +90,23 @@ std::string missing(const std::vector<store::ProcessModel>& models, store::Model
   return std::string("no validated ") + name + " model";
 }
 
-// The models on `machine` that make SMC I: validated and not suspect.
+// A bound from the part's own cuts that may stand in for a structural
+// model: a chatter-free depth cut for 20 revolutions or more, and no chatter
+// at or below it.
+bool usable_bound(const std::optional<StabilityBound>& b) {
+  return b && b->stable_mm > 0 && b->revolutions >= 20 && !b->disagrees();
+}
+
+// The models on `machine` that make SMC I: validated and not suspect; a
+// usable bound from the part's cuts stands in for the milling model.
 struct Usable {
   std::optional<store::ProcessModel> force, milling;
-  bool smc1() const { return force && milling; }
+  std::optional<StabilityBound> bound;
+  bool smc1() const { return force && (milling || bound); }
 };
 
 Usable usable_on(const std::vector<store::ProcessModel>& models, const std::string& machine,
-                 const Cut& c) {
+                 const Cut& c, const std::optional<StabilityBound>& bound) {
   Usable u;
   if (machine.empty()) return u;
   for (const auto& m : models) {
@@ -105,11 +114,14 @@ Usable usable_on(const std::vector<store::ProcessModel>& models, const std::stri
     if (m.kind == store::ModelKind::kForceProcess && !u.force) u.force = m;
     if (m.kind == store::ModelKind::kMilling && !u.milling) u.milling = m;
   }
+  if (!u.milling && usable_bound(bound)) u.bound = bound;
   return u;
 }
 
 // Why these models do not make SMC I.
 std::string why_not(const std::vector<store::ProcessModel>& models, const Usable& u, const Cut& c) {
+  const std::string no_cuts =
+      " and no chatter-free cut of the part at " + num(c.rpm) + " rpm to stand in for it";
   if (!u.force && !u.milling) {
     const std::string f = missing(models, store::ModelKind::kForceProcess, "force-process", c);
     const std::string m = missing(models, store::ModelKind::kMilling, "structural", c);
@@ -118,7 +130,7 @@ std::string why_not(const std::vector<store::ProcessModel>& models, const Usable
                : f + " and " + m;
   }
   if (!u.force) return missing(models, store::ModelKind::kForceProcess, "force-process", c);
-  return missing(models, store::ModelKind::kMilling, "structural", c);
+  return missing(models, store::ModelKind::kMilling, "structural", c) + no_cuts;
 }
 
 std::string listing(const std::vector<store::ProcessModel>& models, const Cut& c) {
@@ -166,12 +178,26 @@ Selection select_variant(const PlanInputs& in) {
   const std::string on = in.machine.id.empty() ? "any machine" : in.machine.id;
   why << "models on " << on << " for tool " << in.tool.id << " and material " << in.part.material_id
       << ": " << listing(in.models, cut_of(in)) << ". ";
-  const Usable u = usable_on(in.models, in.machine.id, cut_of(in));
-  if (u.smc1()) {
+  const Usable u = usable_on(in.models, in.machine.id, cut_of(in), in.bound);
+  if (u.smc1() && u.milling) {
     sel.variant = smc::config::SMC_I;
     sel.force = u.force;
     sel.milling = u.milling;
     why << "SMC I on " << in.machine.id << kSmc1Why;
+  } else if (u.smc1()) {
+    sel.variant = smc::config::SMC_I;
+    sel.force = u.force;
+    sel.bound = u.bound;
+    const auto& b = *u.bound;
+    why << "SMC I on " << in.machine.id
+        << " (transfer line, from the part's own cuts): a validated force-process model exists "
+           "and, with no validated structural model, the part's cuts on "
+        << in.machine.id << " at " << b.rpm << " rpm bound its stability: cut without chatter to "
+        << fmt(b.stable_mm) << " mm (" << b.revolutions << " revolutions, " << b.jobs.size()
+        << " job" << (b.jobs.size() == 1 ? "" : "s") << ")"
+        << (b.has_chatter() ? ", chatter at " + fmt(b.chatter_mm) + " mm" : std::string())
+        << "; so the passes stay within what was cut and the force is held by the model-based "
+           "controller.";
   } else if (const std::string no_plus = smc2_plus_refusal(in); no_plus.empty()) {
     sel.variant = smc::config::SMC_II_PLUS;
     why << "SMC II+ on " << in.machine.id
@@ -197,12 +223,14 @@ Selection bind_and_select(PlanInputs& in, const std::vector<MachineModels>& mach
   auto bind = [&in](const MachineModels& m) {
     in.machine = m.machine;
     in.models = m.models;
+    in.bound = m.bound;
     return select_variant(in);
   };
   if (!pinned.empty()) {
     if (!order.empty()) return bind(*order.front());
     in.machine = {};
     in.models.clear();
+    in.bound.reset();
     return select_variant(in);
   }
   // SMC I on an available machine; if none is available, on the first
@@ -210,7 +238,8 @@ Selection bind_and_select(PlanInputs& in, const std::vector<MachineModels>& mach
   bool any_available = false;
   for (const MachineModels* m : order) any_available = any_available || m->available;
   for (const MachineModels* m : order) {
-    if ((m->available || !any_available) && usable_on(m->models, m->machine.id, cut_of(in)).smc1())
+    if ((m->available || !any_available) &&
+        usable_on(m->models, m->machine.id, cut_of(in), m->bound).smc1())
       return bind(*m);
   }
   // Else SMC II+ on an available machine that can override its spindle
@@ -224,10 +253,11 @@ Selection bind_and_select(PlanInputs& in, const std::vector<MachineModels>& mach
   // Else SMC II on whichever machine is free, each machine's reason given.
   in.machine = {};
   in.models.clear();
+  in.bound.reset();
   std::ostringstream reasons;
   for (const MachineModels* m : order) {
     in.models.insert(in.models.end(), m->models.begin(), m->models.end());
-    const Usable u = usable_on(m->models, m->machine.id, cut_of(in));
+    const Usable u = usable_on(m->models, m->machine.id, cut_of(in), m->bound);
     reasons << (m == order.front() ? "" : "; ") << m->machine.id << ": "
             << (u.smc1() ? std::string("has usable models but its edge is lost")
                          : why_not(m->models, u, cut_of(in)));
@@ -290,13 +320,7 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
   prog->set_part_id(in.part.id);
   prog->set_total_depth_mm(job.depth_mm());
   int passes = 1;
-  if (sel.variant == smc::config::SMC_I) {
-    if (!sel.force || !sel.milling || in.machine.id.empty()) {
-      throw std::runtime_error("job " + in.job.id +
-                               ": an SMC I plan needs the machine and its validated models");
-    }
-    out.machine_id = in.machine.id;
-    out.model_ids = {sel.force->id, sel.milling->id};
+  const auto smc1_supervisor = [&] {
     if (options_.guard_smc1) {
       c.set_grafcet_name("smc1_guarded.grafcet");
       c.set_grafcet_text(smc1_guarded_text_);
@@ -306,6 +330,60 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
       c.set_grafcet_text(smc1_text_);
       for (const char* m : {"A", "B", "C", "I", "J", "L", "M"}) c.add_modules(m);
     }
+  };
+  const auto guard_note = [&] {
+    return options_.guard_smc1
+               ? std::string(
+                     " The chatter detector watches the cut (smc1_guarded): chatter means the "
+                     "models are wrong; it is suppressed and the models are marked suspect.")
+               : std::string();
+  };
+  if (sel.variant == smc::config::SMC_I && !sel.milling && sel.bound) {
+    // From the part's own cuts: no structural model to simulate, so the
+    // passes stay within the depth cut without chatter at this speed, the
+    // controller's feed within the feeds it was cut at, and F_ref comes from
+    // the measured spindle power (module M) rather than from a model.
+    if (!sel.force || in.machine.id.empty()) {
+      throw std::runtime_error("job " + in.job.id +
+                               ": an SMC I plan needs the machine and its validated force model");
+    }
+    const auto& b = *sel.bound;
+    out.machine_id = in.machine.id;
+    out.model_ids = {sel.force->id};
+    smc1_supervisor();
+    *c.mutable_force_model() = sel.force->force;
+    passes = std::max(1, static_cast<int>(std::ceil(job.depth_mm() / b.stable_mm - 1e-9)));
+    if (passes > smc::supervision::kMaxPasses) {
+      throw std::runtime_error("job " + in.job.id + ": passes no deeper than the " +
+                               fmt(b.stable_mm) + " mm cut without chatter would need " +
+                               std::to_string(passes) + " passes (at most " +
+                               std::to_string(smc::supervision::kMaxPasses) + ")");
+    }
+    const double clamp0 = op->min_feed_per_tooth_mm();
+    const double clamp = std::max(clamp0, std::min(b.stable_feed_mm, op->max_feed_per_tooth_mm()));
+    op->set_min_feed_per_tooth_mm(clamp);
+    out.programmed_feed_mm = smc::supervision::feed_per_tooth_mm(
+        job.feedrate_mm_s(), static_cast<int>(in.tool.teeth), rpm);
+    out.lower_clamp_mm = clamp;
+    std::ostringstream why;
+    why << c.explanation() << " " << passes << " equal pass" << (passes == 1 ? "" : "es") << " of "
+        << fmt(job.depth_mm() / passes) << " mm, none deeper than the " << fmt(b.stable_mm)
+        << " mm cut without chatter; the controller's lower feed clamp "
+        << (clamp > clamp0
+                ? "raised to " + fmt(clamp) + " mm/tooth, the lowest feed that cut was made at"
+                : "at " + fmt(clamp) + " mm/tooth")
+        << "; F_ref from the measured spindle power (module M): no structural model gives the "
+           "cut's power."
+        << guard_note();
+    c.set_explanation(why.str());
+  } else if (sel.variant == smc::config::SMC_I) {
+    if (!sel.force || !sel.milling || in.machine.id.empty()) {
+      throw std::runtime_error("job " + in.job.id +
+                               ": an SMC I plan needs the machine and its validated models");
+    }
+    out.machine_id = in.machine.id;
+    out.model_ids = {sel.force->id, sel.milling->id};
+    smc1_supervisor();
     *c.mutable_force_model() = sel.force->force;
     smc::config::MillingModel model = sel.milling->milling;
     *model.mutable_cutter() = mm->cutter();
@@ -403,11 +481,7 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
     why << c.explanation() << " Critical depth at " << rpm << " rpm on " << in.machine.id << ": "
         << fmt(out.critical_depth_mm) << " mm; with a " << margin << " margin, " << passes
         << " equal pass" << (passes == 1 ? "" : "es") << " of " << fmt(job.depth_mm() / passes)
-        << " mm." << depth_note << feed_note;
-    if (options_.guard_smc1) {
-      why << " The chatter detector watches the cut (smc1_guarded): chatter means the models "
-             "are wrong; it is suppressed and the models are marked suspect.";
-    }
+        << " mm." << depth_note << feed_note << guard_note();
     c.set_explanation(why.str());
   } else if (sel.variant == smc::config::SMC_II_PLUS) {
     if (in.machine.id.empty()) {

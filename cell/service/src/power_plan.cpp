@@ -37,7 +37,9 @@ double force_reference_n(const smc::config::SupervisorConfig& c, double max_spin
 }
 
 void plan_force_references(smc::config::SupervisorConfig& c) {
-  if (c.variant() != smc::config::SMC_I || !c.has_milling_model()) return;
+  // A plan from the part's own cuts has no cutting law to simulate: module
+  // M holds the power from the measured spindle power instead.
+  if (c.variant() != smc::config::SMC_I || !c.milling_model().has_law()) return;
   const int teeth = static_cast<int>(c.operation().teeth());
   const double power = c.machine().max_spindle_power_w();
   for (auto& pass : *c.mutable_program()->mutable_passes()) {

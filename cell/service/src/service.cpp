@@ -607,20 +607,16 @@ struct CellService::Impl {
                                                             pl.operation().cutter_radius_mm(),
                                                             pl.program().passes(0).spindle_rpm(),
                                                             pl.operation().force_safety_factor());
-              // SMC I holds each pass at its own F_ref, planned from the
-              // models for the machine's power: the overshoot is over the
-              // highest of them, as the edge sent it.
-              if (cur->variant == cfg::SMC_I && m) {
-                try {
-                  const auto sent = Planner::for_machine(pl, *m, "overshoot");
-                  double highest = 0;
-                  for (const auto& pass : sent.program().passes())
-                    highest = std::max(highest, pass.force_reference_n());
-                  if (highest > 0) ref = highest;
-                } catch (const std::exception& e) {
-                  spdlog::warn("job {}: overshoot against P_max / V: {}", job_id, e.what());
-                }
+              // The reference the edge held: each pass's planned F_ref (SMC I)
+              // as module M scaled it, the highest over the revolutions cut
+              // (recorded in the job's history); the estimate above when none
+              // was recorded.
+              double held = 0;
+              for (const auto& rev : db.revolutions(job_id)) {
+                if (rev.attempt == cur->attempt && rev.in_contact)
+                  held = std::max(held, rev.f_ref_n);
               }
+              if (held > 0) ref = held;
               r.set_force_reference_n(ref);
               if (ref > 0)
                 r.set_overshoot_pct(100.0 * (static_cast<double>(p.peak_force_n) - ref) / ref);
@@ -713,18 +709,38 @@ struct CellService::Impl {
     }
     if (automatic && j->variant == cfg::SMC_I) {
       const auto models = db.plan_models(j->id);
-      const std::string why = "the SMC I plan of job " + j->id + " made from it chattered on " +
-                              machine + " (" + what + ")";
-      for (const auto& id : models) db.mark_model_suspect(id, why);
-      std::string ids;
-      for (const auto& id : models) ids += (ids.empty() ? "" : ", ") + id;
-      reason += "; the plan was made chatter-free from models " + (ids.empty() ? "(none)" : ids) +
-                ", so they are marked suspect and later jobs for part " + j->spec.part_id() +
-                " are planned without them";
-      db.record_catalog_event(
-          "part", j->spec.part_id(), "demoted", "cell",
-          "job " + j->id + ": " + why + "; its models " + ids + " are marked suspect");
-      spdlog::warn("job {}: models {} marked suspect", j->id, ids);
+      bool from_cuts = true;  // no milling model: planned from the part's own cuts
+      for (const auto& id : models) {
+        const auto m = db.model(id);
+        from_cuts = from_cuts && !(m && m->kind == store::ModelKind::kMilling);
+      }
+      if (from_cuts) {
+        // The chatter point recorded below lies at or under the depth the
+        // part was cut clean at: the bound disagrees with itself and no
+        // longer stands in for a structural model. The force model did not
+        // plan the depth and stays.
+        reason +=
+            "; the plan kept to depths the part had cut without chatter at this speed; "
+            "this chatter contradicts that evidence, so later jobs for part " +
+            j->spec.part_id() + " are SMC II until a structural model is validated";
+        db.record_catalog_event("part", j->spec.part_id(), "demoted", "cell",
+                                "job " + j->id +
+                                    ": the SMC I plan from the part's cuts chattered on " +
+                                    machine + " (" + what + ")");
+      } else {
+        const std::string why = "the SMC I plan of job " + j->id + " made from it chattered on " +
+                                machine + " (" + what + ")";
+        for (const auto& id : models) db.mark_model_suspect(id, why);
+        std::string ids;
+        for (const auto& id : models) ids += (ids.empty() ? "" : ", ") + id;
+        reason += "; the plan was made chatter-free from models " + (ids.empty() ? "(none)" : ids) +
+                  ", so they are marked suspect and later jobs for part " + j->spec.part_id() +
+                  " are planned without them";
+        db.record_catalog_event(
+            "part", j->spec.part_id(), "demoted", "cell",
+            "job " + j->id + ": " + why + "; its models " + ids + " are marked suspect");
+        spdlog::warn("job {}: models {} marked suspect", j->id, ids);
+      }
     }
     db.note_event(j->id, reason);
     record_chatter_point(*j, machine, automatic ? double{e.frequency_hz} : 0.0);
@@ -1102,11 +1118,20 @@ struct CellService::Impl {
       return;
     }
     if (sel.variant != cfg::SMC_I) return;
-    const std::string why = "after job " + j.id + ", a job of part " + j.spec.part_id() +
-                            " gets SMC I on " + (sel.force ? sel.force->machine_id : "?") +
-                            ": force model " + (sel.force ? sel.force->id : "?") +
-                            " and milling model " + (sel.milling ? sel.milling->id : "?") +
-                            " are validated";
+    if (!sel.force) return;
+    std::string why = "after job " + j.id + ", a job of part " + j.spec.part_id() +
+                      " gets SMC I on " + sel.force->machine_id + ": force model " + sel.force->id +
+                      " is validated, ";
+    if (sel.milling) {
+      why += "and so is milling model " + sel.milling->id;
+    } else if (sel.bound) {
+      char b[160];
+      std::snprintf(b, sizeof b,
+                    "and the part's cuts at %ld rpm bound its stability (clean to %.2f mm over %u "
+                    "revolutions)",
+                    sel.bound->rpm, sel.bound->stable_mm, sel.bound->revolutions);
+      why += b;
+    }
     db.transaction([&] {
       db.record_catalog_event("part", j.spec.part_id(), "promoted", "cell", why);
       db.note_event(j.id, "part " + j.spec.part_id() + " promoted to SMC I: " + why);

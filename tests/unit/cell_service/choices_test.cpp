@@ -98,6 +98,71 @@ TEST(Selection, NoModelsGiveSmcII) {
   EXPECT_NE(sel.explanation.find("no validated models"), std::string::npos) << sel.explanation;
 }
 
+// The part's own cuts stand in for a structural model: a chatter-free depth
+// over 20 revolutions or more, no chatter at or below it.
+TEST(Selection, APartsCleanCutsStandInForAStructuralModel) {
+  cell::PlanInputs in;
+  in.machine = mill("mill-1");
+  in.job.spec.set_spindle_rpm(1500);
+  in.models = {model(store::ModelKind::kForceProcess, true, "model-1")};
+  cell::StabilityBound b;
+  b.machine_id = "mill-1";
+  b.rpm = 1500;
+  b.stable_mm = 1.0;
+  b.stable_feed_mm = 0.05;
+  b.revolutions = 19;
+  b.chatter_mm = 2.0;
+  b.jobs = {"job-1"};
+  in.bound = b;
+  auto sel = cell::select_variant(in);
+  EXPECT_EQ(sel.variant, cfg::SMC_II) << "19 revolutions are not enough: " << sel.explanation;
+  EXPECT_NE(sel.explanation.find("no chatter-free cut of the part at 1500 rpm"), std::string::npos)
+      << sel.explanation;
+  in.bound->revolutions = 20;
+  sel = cell::select_variant(in);
+  EXPECT_EQ(sel.variant, cfg::SMC_I) << sel.explanation;
+  EXPECT_FALSE(sel.milling.has_value());
+  ASSERT_TRUE(sel.bound.has_value());
+  EXPECT_NE(sel.explanation.find("from the part's own cuts"), std::string::npos) << sel.explanation;
+  // Chatter at the clean depth: the evidence disagrees and stands for nothing.
+  in.bound->chatter_mm = 1.0;
+  EXPECT_EQ(cell::select_variant(in).variant, cfg::SMC_II);
+}
+
+TEST_F(CellChoices, APlanFromThePartsCutsKeepsToTheDepthAndFeedsItWasCutAt) {
+  auto in = inputs("housing-js");
+  cell::StabilityBound b;
+  b.machine_id = "mill-1";
+  b.tool_id = in.tool.id;
+  b.rpm = 1500;
+  b.stable_mm = 0.9;
+  b.stable_feed_mm = 0.06;
+  b.revolutions = 500;
+  b.chatter_mm = 2.0;
+  b.jobs = {"job-1"};
+  in.bound = b;
+  in.models = {model(store::ModelKind::kForceProcess, true, "model-f")};
+  in.models[0].force.set_k_kn(0.72);
+  in.models[0].force.set_beta(0.65);
+  in.models[0].force.set_alpha(0.63);
+  const auto sel = cell::select_variant(in);
+  ASSERT_EQ(sel.variant, cfg::SMC_I) << sel.explanation;
+  const auto plan = planner_->plan(in, sel);
+  ASSERT_EQ(plan.config.program().passes_size(), 3) << "2 mm in passes of 0.9 mm at most";
+  EXPECT_NEAR(plan.config.program().passes(0).depth_mm(), 2.0 / 3, 1e-9);
+  EXPECT_DOUBLE_EQ(plan.config.operation().min_feed_per_tooth_mm(), 0.06)
+      << "the controller's feed no lower than the clean cut's";
+  EXPECT_EQ(plan.machine_id, "mill-1");
+  EXPECT_EQ(plan.model_ids, std::vector<std::string>{"model-f"});
+  EXPECT_EQ(plan.config.grafcet_name(), "smc1_guarded.grafcet");
+  EXPECT_NE(plan.config.explanation().find("none deeper than the 0.9 mm cut without chatter"),
+            std::string::npos)
+      << plan.config.explanation();
+  // No cutting law to plan F_ref from: module M holds the power.
+  const auto sent = cell::Planner::for_machine(plan.config, in.machine, "c-1");
+  for (const auto& p : sent.program().passes()) EXPECT_EQ(p.force_reference_n(), 0);
+}
+
 TEST(Selection, AForceModelAloneNamesTheMissingStructuralModel) {
   cell::PlanInputs in;
   in.machine = mill("mill-1");

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "smc/cell/learning.hpp"
 #include "smc/cell/store/entities.hpp"
 #include "smc_config.pb.h"
 
@@ -20,6 +21,9 @@ struct PlanInputs {
   // The machine the plan is for (its models, its limits). An empty id: any
   // machine (an SMC II plan for a job that names none).
   store::Machine machine;
+  // What the part's cuts showed on `machine` with the job's tool at the
+  // job's speed (learning.hpp), if anything.
+  std::optional<StabilityBound> bound;
 };
 
 // A machine the cell could plan a job for, with the models found for it.
@@ -29,6 +33,7 @@ struct MachineModels {
   // that are available are preferred when several qualify.
   bool available = true;
   std::vector<store::ProcessModel> models;
+  std::optional<StabilityBound> bound;  // the part's cuts on it at the job's tool and speed
 };
 
 struct Selection {
@@ -36,14 +41,19 @@ struct Selection {
   std::string explanation;                     // which models were found, and why this variant
   std::optional<store::ProcessModel> force;    // validated force-process model (SMC I)
   std::optional<store::ProcessModel> milling;  // validated milling (structural) model (SMC I)
+  // SMC I without a milling model: the part's own cuts at the job's speed
+  // on the machine (a chatter-free depth over 20 revolutions or more, and no
+  // chatter at or below it). Passes no deeper than that depth.
+  std::optional<StabilityBound> bound;
 };
 
-// SMC I when a validated, unsuspected force-process model and milling model
-// exist for the job's tool and material (and part, when models are part
-// specific) on in.machine; else SMC II+ when the part allows a spindle speed
-// change and in.machine can override its spindle speed; SMC II otherwise.
-// The explanation names the machine, lists every model considered (suspect
-// ones with the reason) and says why not SMC II+ when the part allows it.
+// SMC I when a validated, unsuspected force-process model exists for the
+// job's tool and material (and part, when models are part specific) on
+// in.machine, with a validated milling model or, failing one, a usable
+// stability bound from the part's own cuts (in.bound); else SMC II+ when the part allows a spindle
+// speed change and in.machine can override its spindle speed; SMC II otherwise. The explanation
+// names the machine, lists every model considered (suspect ones with the reason) and says why not
+// SMC II+ when the part allows it.
 Selection select_variant(const PlanInputs& in);
 
 // The machine's drive has a spindle speed override (module O): the

@@ -23,7 +23,8 @@ double force_reference_n(const smc::config::SupervisorConfig& config, double max
 
 // Sets program.passes[i].force_reference_n of an SMC I configuration whose
 // machine is filled in (force_reference_n for each pass). Leaves other
-// variants, and configurations without a milling model, as they are.
+// variants, and configurations whose milling model has no cutting law (an
+// SMC I plan from the part's own cuts), as they are.
 void plan_force_references(smc::config::SupervisorConfig& config);
 
 }  // namespace smc::cell
