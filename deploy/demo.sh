@@ -4,8 +4,12 @@
 # and one job-shop job (SMC II) and prints a live summary until both finish.
 # This is the README's demo command; it installs what it needs first.
 #
-#   deploy/demo.sh [--speedup N] [--keep] [--linuxcnc] [--insecure]
+#   deploy/demo.sh [--speedup N] [--learn N] [--keep] [--linuxcnc] [--insecure]
 #     --speedup N  machine seconds per wall second for the simulated mills (default 2)
+#     --learn N    then submit the job-shop part N times in a row on one mill
+#                  (mill-1; mill-2 with --linuxcnc): the cell learns its models
+#                  and promotes it to SMC I (cell/README.md, "Learning and
+#                  promotion"); prints smc-cell part show and plots its runs
 #     --keep       leave the cell running after the jobs finish (Ctrl-C ends it)
 #     --linuxcnc   mill-1 is a headless LinuxCNC (deploy/linuxcnc/) whose own
 #                  motion cuts the paper's part through the virtual
@@ -20,12 +24,14 @@ cd "$(dirname "$0")/.."
 root=$PWD
 
 speedup=2
+learn=0
 keep=0
 linuxcnc=0
 secure=1
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --speedup) speedup="$2"; shift 2 ;;
+    --learn) learn="$2"; shift 2 ;;
     --keep) keep=1; shift ;;
     --linuxcnc) linuxcnc=1; shift ;;
     --insecure) secure=0; shift ;;
@@ -144,6 +150,18 @@ jp=$("$bin/smc-cell" job submit "$plus_job" --db "$run/cell.db" | awk '{print $1
 
 echo
 grep -hE "chatter|candidate force model|validated|promoted" "$run/cell.log" | sed 's/^/  /' || true
+if [[ $learn -gt 0 ]]; then
+  on=mill-1
+  [[ $linuxcnc -eq 0 ]] || on=mill-2
+  echo "== learning: part housing-js submitted $learn times in a row on $on"
+  printf 'part_id: "housing-js"\nmachine_id: "%s"\n' "$on" >"$run/learn.textproto"
+  for ((i = 1; i <= learn; ++i)); do
+    id=$("$bin/smc-cell" job submit "$run/learn.textproto" --db "$run/cell.db" | awk '{print $1}')
+    echo "-- run $i of $learn: job $id"
+    "$bin/smc-cell" watch "$id" --db "$run/cell.db" --interval 5 --timeout 600 | tail -n 2
+  done
+  "$bin/smc-cell" part show housing-js --db "$run/cell.db" --plot "$run/housing-js-runs.svg"
+fi
 if [[ $keep -eq 1 ]]; then
   echo "demo: the cell keeps running; Ctrl-C to stop"
   wait

@@ -501,6 +501,35 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
       c.add_modules(m);
     }
   }
+  // A job-shop run of a part with no validated force model carries an
+  // identification segment, so that its revolutions hold F_Y at more than
+  // one level and the cell can fit the model's exponents (learning.hpp).
+  // Not under SMC II+: module N reads the step down of F_ref (the feed falls
+  // by 40 % within a revolution, the chips change between teeth) as a broken
+  // tooth.
+  if (sel.variant == smc::config::SMC_II && options_.identification_revolutions > 0) {
+    bool validated_force = false;
+    for (const auto& m : in.models) {
+      validated_force =
+          validated_force || (m.kind == store::ModelKind::kForceProcess && m.validated &&
+                              m.suspect_reason.empty() && m.part_id == in.part.id);
+    }
+    if (!validated_force) {
+      std::ostringstream levels;
+      for (const double l : options_.identification_levels) {
+        op->add_identification_levels(l);
+        levels << (levels.tellp() > 0 ? ", " : "") << std::lround(100 * l) << " %";
+      }
+      op->set_identification_revolutions(options_.identification_revolutions);
+      c.set_explanation(c.explanation() + " Identification segment: part " + in.part.id +
+                        " has no validated force model, so in the last pass, 20 revolutions "
+                        "after contact, F_ref steps to " +
+                        levels.str() + " of itself for " +
+                        std::to_string(options_.identification_revolutions) +
+                        " revolutions each, and the cell fits the model's exponents from "
+                        "the forces at each level.");
+    }
+  }
   for (int i = 0; i < passes; ++i) {
     auto* p = prog->add_passes();
     p->set_depth_mm(job.depth_mm() / passes);

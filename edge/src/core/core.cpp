@@ -149,7 +149,32 @@ void EdgeCore::start() {
   last_done_ = false;
   speed_change_pass_ = -1;
   applied_speed_rpm_ = 0;
+  ident_pass_ = -1;
+  ident_revolutions_ = 0;
+  ident_done_ = false;
+  ident_factor_ = 1;
   batch_ = ForceBatchRecord{};
+}
+
+void EdgeCore::advance_identification() noexcept {
+  const EdgeParameters& p = config_.params;
+  ident_factor_ = 1;
+  if (p.identification_revolutions <= 0 || ident_done_) return;
+  const int pass = running_.current_pass;
+  if (pass < 0 || pass != running_.program.count - 1 || !s_.contact) return;
+  if (pass != ident_pass_) {
+    ident_pass_ = pass;
+    ident_revolutions_ = 0;
+  }
+  ++ident_revolutions_;
+  const int r = ident_revolutions_ - EdgeParameters::kIdentificationSettle;
+  if (r < 0) return;
+  const int level = r / p.identification_revolutions;
+  if (level >= p.identification_level_count) {
+    ident_done_ = true;
+    return;
+  }
+  ident_factor_ = p.identification_levels[level];
 }
 
 EdgeEvent EdgeCore::make_event(EventKind kind) const noexcept {
@@ -263,7 +288,7 @@ void EdgeCore::tick(bool overrun) noexcept {
                              : 0.0;
   s_.force_reference_planned = planned > 0;
   s_.force_reference_base_n = planned > 0 ? planned : p.force_reference_at(s_.spindle_rpm);
-  s_.force_reference_n = s_.force_reference_base_n * s_.force_reference_scale;
+  s_.force_reference_n = s_.force_reference_base_n * s_.force_reference_scale * ident_factor_;
   if (std::isfinite(drive_sample_.spindle_power_w)) {
     power_peak_w_ = std::max(power_peak_w_, drive_sample_.spindle_power_w);
     power_sum_w_ += drive_sample_.spindle_power_w;
@@ -312,6 +337,7 @@ void EdgeCore::tick(bool overrun) noexcept {
       Module& m = *schedule_.revolution[static_cast<size_t>(i)];
       if (is_active(s_.active | supervisory_, m.id())) run_module(m, false);
     }
+    advance_identification();
   }
   // 4. Fast modules (B, D, G), then the configured event modules another
   // module asked for (F, when G asks).
@@ -347,6 +373,11 @@ void EdgeCore::tick(bool overrun) noexcept {
       }
       programs_.try_push(running_.program);
       emit(EventKind::kProgramRewritten);
+      // The identification segment belongs to the program's last pass: a
+      // rewritten program has a new one, and the segment runs there again.
+      ident_pass_ = -1;
+      ident_done_ = false;
+      ident_factor_ = 1;
     }
   }
 

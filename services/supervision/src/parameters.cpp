@@ -182,6 +182,26 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   p.speed_change_timeout_s =
       or_default("speed_change_timeout_s", op.speed_change_timeout_s(), 5.0, 0.01, 60.0,
                  "set the time the spindle has to reach a new speed, e.g. 5 (0: default)");
+  if (op.identification_levels_size() > Parameters::kMaxIdentificationLevels) {
+    o.fail("identification_levels", "has more levels than the edge holds",
+           op.identification_levels_size(), "give at most 4 levels, e.g. [0.6, 0.8]");
+  } else {
+    for (int i = 0; i < op.identification_levels_size(); ++i) {
+      const std::string field = "identification_levels[" + std::to_string(i) + "]";
+      p.identification_levels[i] =
+          o.in_range(field.c_str(), op.identification_levels(i), 0.3, 1.0,
+                     "give F_ref multipliers inside the power limit, e.g. [0.6, 0.8]");
+    }
+    p.identification_level_count = op.identification_levels_size();
+  }
+  const double ident_revs =
+      o.in_range("identification_revolutions", op.identification_revolutions(), 0, 200,
+                 "give the revolutions per level, e.g. 10 (0: no identification segment)");
+  p.identification_revolutions = ident_revs <= 200 ? static_cast<int>(ident_revs) : 0;
+  if (p.identification_revolutions > 0 && p.identification_level_count == 0) {
+    o.fail("identification_revolutions", "is set but identification_levels is empty",
+           op.identification_revolutions(), "give the levels too, or 0 revolutions");
+  }
   p.force_sensor_range_n = o.positive("force_sensor_range_n", op.force_sensor_range_n(),
                                       "set the dynamometer's range, e.g. 5000");
 

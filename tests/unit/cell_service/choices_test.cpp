@@ -163,6 +163,37 @@ TEST_F(CellChoices, APlanFromThePartsCutsKeepsToTheDepthAndFeedsItWasCutAt) {
   for (const auto& p : sent.program().passes()) EXPECT_EQ(p.force_reference_n(), 0);
 }
 
+// An SMC II run of a part with no validated force model carries the
+// identification segment, declared in its explanation; SMC II+ runs (module
+// N would read the step as a broken tooth) and parts with a validated force
+// model do not.
+TEST_F(CellChoices, AJobShopRunOfAPartWithoutAForceModelCarriesAnIdentificationSegment) {
+  auto in = inputs("housing-js");
+  in.models.clear();
+  auto sel = cell::select_variant(in);
+  ASSERT_EQ(sel.variant, cfg::SMC_II);
+  auto plan = planner_->plan(in, sel);
+  ASSERT_EQ(plan.config.operation().identification_levels_size(), 2);
+  EXPECT_DOUBLE_EQ(plan.config.operation().identification_levels(0), 0.6);
+  EXPECT_DOUBLE_EQ(plan.config.operation().identification_levels(1), 0.8);
+  EXPECT_EQ(plan.config.operation().identification_revolutions(), 15u);
+  EXPECT_NE(plan.config.explanation().find("Identification segment"), std::string::npos);
+  (void)smc::supervision::parameters_from_config(
+      cell::Planner::for_machine(plan.config, in.machine, "c-1"));  // the edge accepts it
+  auto force = model(store::ModelKind::kForceProcess, true, "model-f");
+  force.part_id = "housing-js";
+  in.models = {force};
+  sel = cell::select_variant(in);
+  ASSERT_EQ(sel.variant, cfg::SMC_II);
+  plan = planner_->plan(in, sel);
+  EXPECT_EQ(plan.config.operation().identification_revolutions(), 0u);
+  auto plus = inputs("cover-jsp");
+  plus.models.clear();
+  sel = cell::select_variant(plus);
+  ASSERT_EQ(sel.variant, cfg::SMC_II_PLUS);
+  EXPECT_EQ(planner_->plan(plus, sel).config.operation().identification_revolutions(), 0u);
+}
+
 TEST(Selection, AForceModelAloneNamesTheMissingStructuralModel) {
   cell::PlanInputs in;
   in.machine = mill("mill-1");

@@ -17,6 +17,7 @@
 #include "smc/edge/runner.hpp"
 #include "smc/edge/sim_mill.hpp"
 #include "smc/grafcet/parser.hpp"
+#include "smc/supervision/parameters.hpp"
 #include "smc_config.pb.h"
 
 using namespace smc::edge;
@@ -347,6 +348,66 @@ TEST(PaperRuns, RevolutionsFollowTheMeasuredSpindleSpeed) {
   ASSERT_GE(s.chatter_detected_s(), 0);
   EXPECT_LE(s.detection_delay_s(), 3 * 60.0 / 1100) << "onset " << s.chatter_onset_s();
   EXPECT_EQ(r->activity_mismatches, 0u) << r->first_mismatch;
+}
+
+// The identification segment a job-shop run may carry: in the last pass,
+// 20 revolutions after contact, F_ref steps to each level for the given
+// revolutions, once, and F_Y follows it there. The paper's 2 mm pass is the
+// last until its chatter is suppressed; the rewritten program's last 1 mm
+// pass runs the segment again.
+TEST(PaperRuns, AnIdentificationSegmentStepsTheForceReferenceInTheLastPass) {
+  auto r = run_paper("smc2.textproto", {}, [](smc::config::SupervisorConfig& c) {
+    c.mutable_operation()->add_identification_levels(0.6);
+    c.mutable_operation()->add_identification_levels(0.8);
+    c.mutable_operation()->set_identification_revolutions(15);
+  });
+  ASSERT_TRUE(r->summary.completed());
+  std::vector<const smc::edge::RevolutionRecord*> last;  // the last pass, in contact
+  int passes = 0;
+  for (const auto& rev : r->run.revolutions) passes = std::max<int>(passes, rev.pass_count);
+  for (const auto& rev : r->run.revolutions) {
+    if (rev.contact && rev.pass_index == passes - 1 && rev.pass_count == passes)
+      last.push_back(&rev);
+  }
+  ASSERT_GT(last.size(), 60u);
+  const double full = last[5]->f_ref_n;
+  int at60 = 0, at80 = 0, settled60 = 0, settled80 = 0;
+  for (std::size_t i = 0; i < last.size(); ++i) {
+    const double ratio = last[i]->f_ref_n / full;
+    if (std::fabs(ratio - 0.6) < 0.02) {
+      ++at60;
+      if (std::fabs(last[i]->f_y_peak_n - last[i]->f_ref_n) < 0.1 * last[i]->f_ref_n) ++settled60;
+    } else if (std::fabs(ratio - 0.8) < 0.02) {
+      ++at80;
+      if (std::fabs(last[i]->f_y_peak_n - last[i]->f_ref_n) < 0.1 * last[i]->f_ref_n) ++settled80;
+    }
+  }
+  EXPECT_EQ(at60, 15);
+  EXPECT_EQ(at80, 15);
+  // K follows a step of F_ref down by 40 % in about 8 revolutions (its
+  // pole), the step up to 80 % in 1.
+  EXPECT_GE(settled60, 6) << "F_Y settles at each level within the level's revolutions";
+  EXPECT_GE(settled80, 12);
+  // The first 20 revolutions in contact settle at the full reference.
+  for (std::size_t i = 0; i < 20; ++i) EXPECT_NEAR(last[i]->f_ref_n / full, 1.0, 0.02) << i;
+  EXPECT_NEAR(last[20]->f_ref_n / full, 0.6, 0.02);
+  EXPECT_EQ(r->activity_mismatches, 0u) << r->first_mismatch;
+}
+
+TEST(PaperRuns, AnIdentificationSegmentOutsideThePowerLimitIsRefused) {
+  smc::config::SupervisorConfig c;
+  smc::documents::load(std::string(SMC_SOURCE_DIR) + "/edge/configs/smc2.textproto", c);
+  c.mutable_operation()->add_identification_levels(1.2);
+  c.mutable_operation()->set_identification_revolutions(10);
+  smc::common::Diagnostics problems;
+  (void)smc::supervision::read_parameters(c, problems);
+  ASSERT_FALSE(problems.ok());
+  EXPECT_NE(problems.str().find("identification_levels[0]"), std::string::npos) << problems.str();
+  c.mutable_operation()->clear_identification_levels();
+  smc::common::Diagnostics missing;
+  (void)smc::supervision::read_parameters(c, missing);
+  EXPECT_NE(missing.str().find("identification_levels is empty"), std::string::npos)
+      << missing.str();
 }
 
 // ---- bad samples and module errors end in feed hold with an event ----

@@ -3,6 +3,7 @@
 // the job, its part, tool and machine and the models found for them, never
 // the database.
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -90,6 +91,11 @@ struct PlannerOptions {
   // The lower clamp on the controller's feed is raised at most to this share
   // of the steady feed before a pass is added instead.
   double max_clamp_share = 0.8;
+  // The identification segment of a job-shop run of a part with no
+  // validated force model: F_ref x each level for this many revolutions
+  // (0: none). cell/README.md, "Learning and promotion".
+  std::vector<double> identification_levels{0.6, 0.8};
+  std::uint32_t identification_revolutions = 15;
 };
 
 class Planner {

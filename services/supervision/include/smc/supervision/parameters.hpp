@@ -74,6 +74,14 @@ struct Parameters {
   double speed_change_max_ratio = 2;            // module O: within [1/r, r] x programmed
   double spindle_at_speed_tolerance = 0.01;     // module O: at speed within this share
   double speed_change_timeout_s = 5;            // module O: at speed within this time
+  // Identification segment: F_ref x levels[i] for `revolutions` revolutions
+  // each, in the last pass from kIdentificationSettle revolutions after
+  // contact (identification_revolutions == 0: none).
+  static constexpr int kMaxIdentificationLevels = 4;
+  static constexpr int kIdentificationSettle = 20;
+  double identification_levels[kMaxIdentificationLevels] = {};
+  int identification_level_count = 0;
+  int identification_revolutions = 0;
   // Force-process model (eq. 1) for module L: F_Y[kN] = K d^beta f^alpha.
   bool has_force_model = false;
   double model_k_kn = 0;
