@@ -893,6 +893,10 @@ struct CellService::Impl {
         if (j.machine_id != get_string(s.machine_id) ||
             (j.variant != cfg::SMC_II && j.variant != cfg::SMC_II_PLUS))
           continue;
+        // Eq. 1 has no speed term: only revolutions at the job's programmed
+        // speed (SMC II+ may move the spindle).
+        const double rpm = j.spec.spindle_rpm();
+        if (rpm > 0 && std::fabs(double{s.spindle_rpm} - rpm) > 0.01 * rpm) continue;
         learning[j.id].push_back({s.depth_mm, s.feed_per_tooth_mm, s.f_y_peak_n});
       }
     });

@@ -182,11 +182,10 @@ void plot_runs(const std::vector<Run>& runs, const store::Part& p, const std::st
     if (!last_variant.empty() && r.variant != last_variant) fig.add_vertical(k - 0.5, r.variant);
     last_variant = r.variant;
   }
-  for (auto* s :
-       {&fig.add_line("cycle time (s)", n, cycle), &fig.add_line("overshoot (%)", n, overshoot),
-        &fig.add_line("chatter events x 10", n, chatter)}) {
-    s->style = smc::plot::Style::line_and_markers;
-  }
+  // A series' reference is valid until the next add: style each as it comes.
+  fig.add_line("cycle time (s)", n, cycle).style = smc::plot::Style::line_and_markers;
+  fig.add_line("overshoot (%)", n, overshoot).style = smc::plot::Style::line_and_markers;
+  fig.add_line("chatter events x 10", n, chatter).style = smc::plot::Style::line_and_markers;
   fig.write(path);
 }
 
