@@ -908,6 +908,32 @@ class Learning : public Cell, public ::testing::WithParamInterface<bool> {
     }
     EXPECT_TRUE(noted) << "the run that earned the promotion says so";
     EXPECT_TRUE(std::filesystem::file_size(plot) > 1000);
+    if (tap_test) return;
+    // Demotion: mill-1 changes (its tool softer and less damped, the
+    // material harder: the mismatched mill) and the plan from the part's
+    // cuts chatters. The chatter is suppressed, the part is demoted and its
+    // next job is SMC II; the force model, which planned no depth, stays.
+    start_edge("mill-1", "cell/models/paper_face_mill_mismatched.textproto");
+    const std::string changed = submit(job_doc.string());
+    ASSERT_TRUE(wait_jobs(
+        {changed}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
+    const auto c = *job(changed);
+    EXPECT_EQ(c.variant, cfg::SMC_I);
+    ASSERT_TRUE(c.result.has_value());
+    EXPECT_GE(c.result->chatter_events(), 1u);
+    std::string reasons;
+    for (const auto& e : events(changed)) reasons += e.reason + "\n";
+    EXPECT_NE(reasons.find("part plate-js is demoted"), std::string::npos) << reasons;
+    const std::string after = submit(job_doc.string());
+    ASSERT_TRUE(wait_jobs(
+        {after}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
+    EXPECT_EQ(job(after)->variant, cfg::SMC_II) << job(after)->explanation;
+    auto db2 = store::Store::open(db_, store::OpenMode::kExisting);
+    EXPECT_TRUE(db2.model(force->id)->suspect_reason.empty());
+    bool demoted = false;
+    for (const auto& h : db2.history("part", "plate-js"))
+      demoted = demoted || h.action == "demoted";
+    EXPECT_TRUE(demoted);
   }
 };
 

@@ -721,8 +721,9 @@ struct CellService::Impl {
         // plan the depth and stays.
         reason +=
             "; the plan kept to depths the part had cut without chatter at this speed; "
-            "this chatter contradicts that evidence, so later jobs for part " +
-            j->spec.part_id() + " are SMC II until a structural model is validated";
+            "this chatter contradicts that evidence, so part " +
+            j->spec.part_id() + " is demoted: its later jobs on " + machine +
+            " are SMC II until a structural model is validated";
         db.record_catalog_event("part", j->spec.part_id(), "demoted", "cell",
                                 "job " + j->id +
                                     ": the SMC I plan from the part's cuts chattered on " +
@@ -734,8 +735,8 @@ struct CellService::Impl {
         std::string ids;
         for (const auto& id : models) ids += (ids.empty() ? "" : ", ") + id;
         reason += "; the plan was made chatter-free from models " + (ids.empty() ? "(none)" : ids) +
-                  ", so they are marked suspect and later jobs for part " + j->spec.part_id() +
-                  " are planned without them";
+                  ", so they are marked suspect and part " + j->spec.part_id() +
+                  " is demoted: its later jobs are planned without them";
         db.record_catalog_event(
             "part", j->spec.part_id(), "demoted", "cell",
             "job " + j->id + ": " + why + "; its models " + ids + " are marked suspect");
