@@ -965,13 +965,29 @@ struct CellService::Impl {
     const std::string why = "predicted F_Y of " + std::to_string(in_a_row) +
                             " runs in a row within " + std::to_string(int(policy.within_pct)) +
                             " % (jobs " + jobs + ")";
-    db.transaction([&] {
-      db.set_model_validated(m.id, true);
-      db.record_catalog_event("model", m.id, "validated", "cell", why);
-      db.note_event(j.id, "force model " + m.id + " validated: " + why);
-    });
-    spdlog::info("model {} validated: {}", m.id, why);
+    judge(j, "force model", m.id, true, why);
     return true;
+  }
+
+  // What the cell's learning concluded about a model, in one transaction:
+  // validated or suspect, in the model's history and in the job's notes.
+  void judge(const store::Job& j, const char* what, const std::string& id, bool valid,
+             const std::string& why) {
+    db.transaction([&] {
+      if (valid) {
+        db.set_model_validated(id, true);
+      } else {
+        db.mark_model_suspect(id, why);
+      }
+      db.record_catalog_event("model", id, valid ? "validated" : "suspected", "cell", why);
+      db.note_event(j.id, std::string(what) + " " + id +
+                              (valid ? " validated: " : " marked suspect: ") + why);
+    });
+    if (valid) {
+      spdlog::info("model {} validated: {}", id, why);
+    } else {
+      spdlog::warn("model {} marked suspect: {}", id, why);
+    }
   }
 
   // A candidate force-process model (F_Y = K d^beta f^alpha) fitted from a
@@ -1091,21 +1107,11 @@ struct CellService::Impl {
                     rpm, c.critical_at_stable_mm, c.critical_at_chatter_mm, j.machine_id.c_str(),
                     bound->stable_mm, bound->chatter_mm);
       if (c.contradicted()) {
-        const std::string why = std::string("contradicted by the part's cuts: ") + what;
-        db.transaction([&] {
-          db.mark_model_suspect(m.id, why);
-          db.record_catalog_event("model", m.id, "suspected", "cell", why);
-          db.note_event(j.id, "milling model " + m.id + " marked suspect: " + why);
-        });
-        spdlog::warn("model {} marked suspect: {}", m.id, why);
+        judge(j, "milling model", m.id, false,
+              std::string("contradicted by the part's cuts: ") + what);
       } else if (c.brackets()) {
-        const std::string why = std::string("consistent with the part's cuts: ") + what;
-        db.transaction([&] {
-          db.set_model_validated(m.id, true);
-          db.record_catalog_event("model", m.id, "validated", "cell", why);
-          db.note_event(j.id, "milling model " + m.id + " validated: " + why);
-        });
-        spdlog::info("model {} validated: {}", m.id, why);
+        judge(j, "milling model", m.id, true,
+              std::string("consistent with the part's cuts: ") + what);
       }
     }
   }

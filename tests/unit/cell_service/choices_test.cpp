@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
@@ -79,6 +80,22 @@ store::ProcessModel model(store::ModelKind kind, bool validated, const std::stri
   return m;
 }
 
+// What a part's cuts showed on mill-1 at 1500 rpm: clean to `stable_mm`
+// over `revolutions` at `feed` mm/tooth, chatter at 2 mm.
+cell::StabilityBound cuts(double stable_mm, double feed, std::uint32_t revolutions,
+                          const std::string& tool = {}) {
+  cell::StabilityBound b;
+  b.machine_id = "mill-1";
+  b.tool_id = tool;
+  b.rpm = 1500;
+  b.stable_mm = stable_mm;
+  b.stable_feed_mm = feed;
+  b.revolutions = revolutions;
+  b.chatter_mm = 2.0;
+  b.jobs = {"job-1"};
+  return b;
+}
+
 store::Machine mill(const std::string& id, double power_w = 745.7) {
   return store::Machine{id, "a mill", power_w, 36, 3000};
 }
@@ -105,15 +122,7 @@ TEST(Selection, APartsCleanCutsStandInForAStructuralModel) {
   in.machine = mill("mill-1");
   in.job.spec.set_spindle_rpm(1500);
   in.models = {model(store::ModelKind::kForceProcess, true, "model-1")};
-  cell::StabilityBound b;
-  b.machine_id = "mill-1";
-  b.rpm = 1500;
-  b.stable_mm = 1.0;
-  b.stable_feed_mm = 0.05;
-  b.revolutions = 19;
-  b.chatter_mm = 2.0;
-  b.jobs = {"job-1"};
-  in.bound = b;
+  in.bound = cuts(1.0, 0.05, 19);
   auto sel = cell::select_variant(in);
   EXPECT_EQ(sel.variant, cfg::SMC_II) << "19 revolutions are not enough: " << sel.explanation;
   EXPECT_NE(sel.explanation.find("no chatter-free cut of the part at 1500 rpm"), std::string::npos)
@@ -131,16 +140,7 @@ TEST(Selection, APartsCleanCutsStandInForAStructuralModel) {
 
 TEST_F(CellChoices, APlanFromThePartsCutsKeepsToTheDepthAndFeedsItWasCutAt) {
   auto in = inputs("housing-js");
-  cell::StabilityBound b;
-  b.machine_id = "mill-1";
-  b.tool_id = in.tool.id;
-  b.rpm = 1500;
-  b.stable_mm = 0.9;
-  b.stable_feed_mm = 0.06;
-  b.revolutions = 500;
-  b.chatter_mm = 2.0;
-  b.jobs = {"job-1"};
-  in.bound = b;
+  in.bound = cuts(0.9, 0.06, 500, in.tool.id);
   in.models = {model(store::ModelKind::kForceProcess, true, "model-f")};
   in.models[0].force.set_k_kn(0.72);
   in.models[0].force.set_beta(0.65);
