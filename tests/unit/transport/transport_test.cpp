@@ -452,6 +452,21 @@ TEST(MachinePartitions, NamesAreCheckedAndReadBack) {
 namespace {
 std::vector<std::string> refusals;  // what the refusal handler was told
 void record_refusal(const std::string& what) { refusals.push_back(what); }
+// The machine ids of the first samples the reader takes (waiting up to 10 s
+// for any): reliable and in order from one writer, so once one is taken the
+// ones written before it have been judged too.
+std::vector<std::string> first_machine_ids(Reader<smc_data_SupervisorSituation>& reader) {
+  std::vector<std::string> seen;
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (seen.empty() && std::chrono::steady_clock::now() < deadline) {
+    reader.take([&](const smc_data_SupervisorSituation& x, const SampleInfo& i) {
+      if (i.valid_data) seen.push_back(get_string(x.machine_id));
+    });
+    std::this_thread::sleep_for(2ms);
+  }
+  return seen;
+}
+
 }  // namespace
 
 TEST(MachinePartitions, AMachinesWriterPosingAsAnotherMachineIsRefusedAndReported) {
@@ -472,14 +487,7 @@ TEST(MachinePartitions, AMachinesWriterPosingAsAnotherMachineIsRefusedAndReporte
   writer.write(s);
   // Reliable and in order from one writer: once mill-1's sample is in, the
   // one before it has been taken too.
-  std::vector<std::string> seen;
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
-  while (seen.empty() && std::chrono::steady_clock::now() < deadline) {
-    reader.take([&](const smc_data_SupervisorSituation& x, const SampleInfo& i) {
-      if (i.valid_data) seen.push_back(get_string(x.machine_id));
-    });
-    std::this_thread::sleep_for(2ms);
-  }
+  const std::vector<std::string> seen = first_machine_ids(reader);
   set_refusal_handler(nullptr);
   EXPECT_EQ(seen, std::vector<std::string>{"mill-1"});
   EXPECT_EQ(reader.refused(), 1u);
@@ -513,14 +521,7 @@ TEST(MachinePartitions, SamplesTakenAfterTheirWriterHasGoneAreJudgedByItsPartiti
   }
   ASSERT_EQ(reader.subscription_matched().current_count, 0u) << "the writer did not go";
   set_refusal_handler(&record_refusal);
-  std::vector<std::string> seen;
-  const auto deadline = std::chrono::steady_clock::now() + 10s;
-  while (seen.empty() && std::chrono::steady_clock::now() < deadline) {
-    reader.take([&](const smc_data_SupervisorSituation& x, const SampleInfo& i) {
-      if (i.valid_data) seen.push_back(get_string(x.machine_id));
-    });
-    std::this_thread::sleep_for(2ms);
-  }
+  const std::vector<std::string> seen = first_machine_ids(reader);
   set_refusal_handler(nullptr);
   EXPECT_EQ(seen, std::vector<std::string>{"mill-1"});
   EXPECT_EQ(reader.refused(), 1u);
