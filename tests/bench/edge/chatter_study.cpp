@@ -3,7 +3,7 @@
 //
 //   build/release/bin/smc-bench-chatter-detector [--seeds N] [--speeds 750,1100,...]
 //       [--widths 25,37,50] [--fractions 0.3,0.6,0.9,1.3,1.8] [--runouts 0,10,20]
-//       [--quick] [--verbose]
+//       [--quick] [--verbose] [--dump FILE.csv]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
@@ -15,7 +15,11 @@
 // summary's chatter onset): stable cuts give the false-alarm figures
 // (revolutions in the cut whose statistic exceeded the threshold, confirmed
 // detections, the largest statistic), unstable cuts the delay from the onset
-// to E's detection, in revolutions. Progress goes to stderr.
+// to E's detection, in revolutions. Progress goes to stderr. --dump writes
+// every revolution E judged or skipped in contact (statistic, engagement,
+// feed) with its run's onset, to try other decision rules offline: what
+// happens before E's first detection does not depend on the rule (run with
+// --threshold 1 so that E never fires).
 
 #include <algorithm>
 #include <cmath>
@@ -55,6 +59,7 @@ int main(int argc, char** argv) {
   grid.runouts = {0};
   double threshold_override = 0;
   int confirm_override = 0;
+  std::FILE* dump = nullptr;
   for (int i = 1; i < argc; ++i) {
     if (grid.take(argc, argv, i)) continue;
     const bool more = i + 1 < argc;
@@ -62,10 +67,20 @@ int main(int argc, char** argv) {
       threshold_override = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
       confirm_override = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--dump") == 0 && more) {
+      dump = std::fopen(argv[++i], "w");
+      if (dump == nullptr) {
+        std::perror(argv[i]);
+        return 2;
+      }
+      std::fprintf(dump,
+                   "run,rpm,width,runout,fraction,seed,onset_s,t_s,statistic,engagement,"
+                   "feed_per_tooth_mm\n");
     } else {
       std::fprintf(stderr,
                    "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
-                   "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose]\n",
+                   "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose] "
+                   "[--dump FILE.csv]\n",
                    argv[0]);
       return 2;
     }
@@ -97,6 +112,7 @@ int main(int argc, char** argv) {
               "crit_mm", "runs", "stable", "revs", "exceed", "false", "max_stat", "unstable",
               "delay_rev");
   std::vector<Cell> cells;
+  int run_id = 0;
   Cell all;
   for (double rpm : speeds) {
     for (double width : widths) {
@@ -143,6 +159,15 @@ int main(int argc, char** argv) {
             RunResult run = run_virtual(core, opts);
             const auto s = summarize(core, run);
             const double first_detection = s.chatter_detected_s();
+            ++run_id;
+            if (dump != nullptr) {
+              for (const auto& r : run.revolutions) {
+                if ((r.active & bit(ModuleId::E)) == 0 || !r.contact) continue;
+                std::fprintf(dump, "%d,%.0f,%.0f,%.0f,%.2f,%d,%.4f,%.4f,%.5f,%.4f,%.5f\n", run_id,
+                             rpm, width, runout, fraction, seed, s.chatter_onset_s(), r.t_s,
+                             r.chatter_ratio, r.engagement_min, r.feed_per_tooth_mm);
+              }
+            }
             uint64_t revs = 0, exceed = 0;
             double max_ratio = 0;
             for (const auto& r : run.revolutions) {
@@ -218,5 +243,6 @@ int main(int argc, char** argv) {
       all.false_detections == 0 && all.detected == all.unstable_runs && all.worst_delay_revs <= 3.0;
   std::printf("goal (0 false detections, every unstable cut within 3 revolutions): %s\n",
               pass ? "met" : "NOT met");
+  if (dump != nullptr) std::fclose(dump);
   return 0;
 }
