@@ -823,7 +823,7 @@ class Learning : public Cell, public ::testing::WithParamInterface<bool> {
     }
     EXPECT_GE(runs[0].result->chatter_events(), 1u) << "the first run chatters, as in the paper";
     // Job-shop runs of a part with no validated force model carry an
-    // identification segment (a staircase of F_ref in the last pass), so
+    // identification segment (F_ref ramped to two levels in the last pass), so
     // that the exponents are fitted, not held.
     EXPECT_NE(runs[0].explanation.find("Identification segment"), std::string::npos)
         << runs[0].explanation;

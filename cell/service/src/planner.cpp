@@ -501,13 +501,14 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
       c.add_modules(m);
     }
   }
-  // A job-shop run of a part with no validated force model carries an
-  // identification segment, so that its revolutions hold F_Y at more than
-  // one level and the cell can fit the model's exponents (learning.hpp).
-  // Not under SMC II+: module N reads the step down of F_ref (the feed falls
-  // by 40 % within a revolution, the chips change between teeth) as a broken
-  // tooth.
-  if (sel.variant == smc::config::SMC_II && options_.identification_revolutions > 0) {
+  // A job-shop run (SMC II or SMC II+) of a part with no validated force
+  // model carries an identification segment, so that its revolutions hold
+  // F_Y at more than one level and the cell can fit the model's exponents
+  // (learning.hpp). The edge ramps F_ref between the levels, so that module
+  // N does not read the change as a broken tooth.
+  const bool job_shop =
+      sel.variant == smc::config::SMC_II || sel.variant == smc::config::SMC_II_PLUS;
+  if (job_shop && options_.identification_revolutions > 0) {
     bool validated_force = false;
     for (const auto& m : in.models) {
       validated_force =
@@ -523,10 +524,10 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
       op->set_identification_revolutions(options_.identification_revolutions);
       c.set_explanation(c.explanation() + " Identification segment: part " + in.part.id +
                         " has no validated force model, so in the last pass, 20 revolutions "
-                        "after contact, F_ref steps to " +
-                        levels.str() + " of itself for " +
+                        "after contact, F_ref ramps (at most 2.5 % a revolution) to " +
+                        levels.str() + " of itself and holds each for " +
                         std::to_string(options_.identification_revolutions) +
-                        " revolutions each, and the cell fits the model's exponents from "
+                        " revolutions, and the cell fits the model's exponents from "
                         "the forces at each level.");
     }
   }

@@ -151,6 +151,8 @@ void EdgeCore::start() {
   applied_speed_rpm_ = 0;
   ident_pass_ = -1;
   ident_revolutions_ = 0;
+  ident_level_ = 0;
+  ident_held_ = 0;
   ident_done_ = false;
   ident_factor_ = 1;
   batch_ = ForceBatchRecord{};
@@ -158,23 +160,28 @@ void EdgeCore::start() {
 
 void EdgeCore::advance_identification() noexcept {
   const EdgeParameters& p = config_.params;
+  const double was = ident_factor_;
   ident_factor_ = 1;
-  if (p.identification_revolutions <= 0 || ident_done_) return;
+  if (p.identification_revolutions <= 0) return;
   const int pass = running_.current_pass;
   if (pass < 0 || pass != running_.program.count - 1 || !s_.contact) return;
   if (pass != ident_pass_) {
     ident_pass_ = pass;
     ident_revolutions_ = 0;
+    ident_level_ = 0;
+    ident_held_ = 0;
   }
-  ++ident_revolutions_;
-  const int r = ident_revolutions_ - EdgeParameters::kIdentificationSettle;
-  if (r < 0) return;
-  const int level = r / p.identification_revolutions;
-  if (level >= p.identification_level_count) {
-    ident_done_ = true;
-    return;
-  }
-  ident_factor_ = p.identification_levels[level];
+  if (ident_revolutions_ < EdgeParameters::kIdentificationSettle) ++ident_revolutions_;
+  if (ident_revolutions_ < EdgeParameters::kIdentificationSettle) return;
+  // Towards the level in force (back to 1 once the segment is done) by a
+  // ramp, then the level's revolutions.
+  const double ramp = EdgeParameters::kIdentificationRamp;
+  const double target = ident_done_ ? 1.0 : p.identification_levels[ident_level_];
+  ident_factor_ = std::clamp(target, was * (1.0 - ramp), was * (1.0 + ramp));
+  if (ident_done_ || ident_factor_ != target) return;
+  if (++ident_held_ < p.identification_revolutions) return;
+  ident_held_ = 0;
+  if (++ident_level_ >= p.identification_level_count) ident_done_ = true;
 }
 
 EdgeEvent EdgeCore::make_event(EventKind kind) const noexcept {

@@ -163,10 +163,9 @@ TEST_F(CellChoices, APlanFromThePartsCutsKeepsToTheDepthAndFeedsItWasCutAt) {
   for (const auto& p : sent.program().passes()) EXPECT_EQ(p.force_reference_n(), 0);
 }
 
-// An SMC II run of a part with no validated force model carries the
-// identification segment, declared in its explanation; SMC II+ runs (module
-// N would read the step as a broken tooth) and parts with a validated force
-// model do not.
+// A job-shop run (SMC II or SMC II+) of a part with no validated force
+// model carries the identification segment, declared in its explanation;
+// a part with a validated force model does not.
 TEST_F(CellChoices, AJobShopRunOfAPartWithoutAForceModelCarriesAnIdentificationSegment) {
   auto in = inputs("housing-js");
   in.models.clear();
@@ -191,7 +190,10 @@ TEST_F(CellChoices, AJobShopRunOfAPartWithoutAForceModelCarriesAnIdentificationS
   plus.models.clear();
   sel = cell::select_variant(plus);
   ASSERT_EQ(sel.variant, cfg::SMC_II_PLUS);
-  EXPECT_EQ(planner_->plan(plus, sel).config.operation().identification_revolutions(), 0u);
+  const auto plus_plan = planner_->plan(plus, sel);
+  EXPECT_EQ(plus_plan.config.operation().identification_revolutions(), 15u);
+  EXPECT_NE(plus_plan.config.explanation().find("Identification segment"), std::string::npos)
+      << plus_plan.config.explanation();
 }
 
 TEST(Selection, AForceModelAloneNamesTheMissingStructuralModel) {

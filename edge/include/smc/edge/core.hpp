@@ -211,10 +211,13 @@ class EdgeCore {
   bool last_in_pass_ = false;
   bool last_done_ = false;
   // The identification segment (supervision/parameters.hpp): the last pass
-  // it counts contact revolutions in, how many, whether it has run, and the
-  // factor on F_ref now. Advanced once per revolution, after the modules.
+  // it counts contact revolutions in, how many, the level it is at and the
+  // revolutions held there, whether it has run, and the factor on F_ref now.
+  // Advanced once per revolution, after the modules.
   int ident_pass_ = -1;
   int ident_revolutions_ = 0;
+  int ident_level_ = 0;
+  int ident_held_ = 0;
   bool ident_done_ = false;
   double ident_factor_ = 1;
   void advance_identification() noexcept;

@@ -76,9 +76,15 @@ struct Parameters {
   double speed_change_timeout_s = 5;            // module O: at speed within this time
   // Identification segment: F_ref x levels[i] for `revolutions` revolutions
   // each, in the last pass from kIdentificationSettle revolutions after
-  // contact (identification_revolutions == 0: none).
+  // contact (identification_revolutions == 0: none). Each level, and 1
+  // after the last, is reached by a ramp: the factor moves by at most
+  // kIdentificationRamp of itself per revolution, so that the feed moves by
+  // less than 5 % a revolution. Module N compares each tooth window with the
+  // revolution before: a step down looks to it like a broken tooth, and a
+  // step up hides one for a revolution or two.
   static constexpr int kMaxIdentificationLevels = 4;
   static constexpr int kIdentificationSettle = 20;
+  static constexpr double kIdentificationRamp = 0.025;
   double identification_levels[kMaxIdentificationLevels] = {};
   int identification_level_count = 0;
   int identification_revolutions = 0;
