@@ -5,7 +5,7 @@
 //
 //   build/release/bin/smc-bench-breakage [--speeds 750,1100,...] [--widths 25,37,50]
 //       [--fractions 0.3,0.6,0.9] [--runouts 0,10,20] [--critical-feed 0.03] [--tooth T]
-//       [--seeds N] [--quick] [--verbose]
+//       [--timings 0.1,0.5,0.9] [--seeds N] [--quick] [--verbose]
 //
 // For each speed and width the critical depth is found by time-domain
 // simulation (smc::machining) at --critical-feed (default 0.03 mm/tooth:
@@ -16,8 +16,12 @@
 // cutter -- every revolution N judged counts towards the false-detection
 // figure, and the largest score N reached on an immediate decision gives the
 // margin -- and once per break timing with tooth T (default 2) losing its
-// edge: at entry (a tenth of the path in contact), in the steady cut (the
-// middle) and at exit (nine tenths). The delay is from the break to N's
+// edge: by default at entry (a tenth of the path in contact), in the steady
+// cut (the middle) and at exit (nine tenths). --timings takes other shares
+// of the path in contact, or revolutions after the first revolution in
+// contact with a trailing r (--timings 0r,1r,2r,3r: the moments N's
+// comparison with the revolution before cannot cover; edge/README.md, "What
+// N does not see"). The delay is from the break to N's
 // detection, in revolutions. Revolutions after E saw chatter are left out
 // of the intact count and reported apart, as are breaks after a chatter.
 // Breaks N cannot see are counted apart too: of a tooth whose chip (runout
@@ -149,6 +153,14 @@ int main(int argc, char** argv) {
   smc::bench::StudyGrid grid;
   int tooth = 2;
   double critical_feed = 0.03;
+  // When the tooth breaks: a share of the path in contact, or revolutions
+  // after the first revolution in contact.
+  struct Timing {
+    double value;
+    bool revolutions;
+    std::string label;
+  };
+  std::vector<Timing> timings{{0.1, false, "entry"}, {0.5, false, "steady"}, {0.9, false, "exit"}};
   for (int i = 1; i < argc; ++i) {
     if (grid.take(argc, argv, i)) continue;
     const bool more = i + 1 < argc;
@@ -156,11 +168,27 @@ int main(int argc, char** argv) {
       critical_feed = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--tooth") == 0 && more) {
       tooth = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--timings") == 0 && more) {
+      timings.clear();
+      std::stringstream in(argv[++i]);
+      std::string item;
+      while (std::getline(in, item, ',')) {
+        const bool revs = !item.empty() && item.back() == 'r';
+        const double v = std::atof(item.c_str());
+        if (!(v >= 0) || (!revs && v > 1)) {
+          std::fprintf(stderr,
+                       "--timings %s: each timing is a share of the path in contact (0-1) or "
+                       "revolutions after contact with a trailing r (e.g. 0.1,0.5,2r)\n",
+                       item.c_str());
+          return 2;
+        }
+        timings.push_back({v, revs, item});
+      }
     } else {
       std::fprintf(stderr,
                    "usage: %s [--speeds LIST] [--widths LIST] [--fractions LIST] "
-                   "[--runouts LIST_UM] [--critical-feed MM] [--tooth T] [--seeds N] [--quick] "
-                   "[--verbose]\n",
+                   "[--runouts LIST_UM] [--critical-feed MM] [--tooth T] [--timings LIST] "
+                   "[--seeds N] [--quick] [--verbose]\n",
                    argv[0]);
       return 2;
     }
@@ -183,9 +211,10 @@ int main(int argc, char** argv) {
       "programmed %.2f mm/tooth, depths as fractions of the critical depth at %.3f mm/tooth, "
       "%d seed(s)\n\n",
       threshold, tooth, fpt, critical_feed, seeds);
-  std::printf("%6s %6s %6s %7s %5s %9s %7s %9s %9s %9s %9s %7s\n", "rpm", "width", "runout",
-              "depth", "runs", "intact_rv", "false", "max_score", "entry_rv", "steady_rv",
-              "exit_rv", "missed");
+  std::printf("%6s %6s %6s %7s %5s %9s %7s %9s", "rpm", "width", "runout", "depth", "runs",
+              "intact_rv", "false", "max_score");
+  for (const auto& t : timings) std::printf(" %9s", (t.label + "_rv").c_str());
+  std::printf(" %7s\n", "missed");
   uint64_t all_revs = 0, all_chatter_revs = 0;
   int all_light = 0, light_detected = 0, all_floor = 0, floor_detected = 0;
   int all_false = 0, all_false_chatter = 0, all_breaks = 0, all_detected = 0, all_within = 0;
@@ -213,7 +242,8 @@ int main(int argc, char** argv) {
           const double depth = fraction * crit;
           uint64_t revs = 0;
           int falses = 0, runs = 0, missed = 0;
-          double max_score = 0, delay[3] = {-1, -1, -1};
+          double max_score = 0;
+          std::vector<double> delay(timings.size(), -1.0);
           for (int seed = 1; seed <= seeds; ++seed) {
             auto raw = base;
             *raw.mutable_milling_model() = model_msg;
@@ -242,11 +272,14 @@ int main(int argc, char** argv) {
             }
             if (intact.contact_s < 0) continue;
             const double span = intact.leave_s - intact.contact_s;
-            const double at[3] = {intact.contact_s + 0.1 * span, intact.contact_s + 0.5 * span,
-                                  intact.contact_s + 0.9 * span};
-            for (int k = 0; k < 3; ++k) {
-              std::fprintf(stderr, "\r%4.0f rpm, %2.0f mm, runout %2.0f um, %.2f mm, break %d   ",
-                           rpm, width, runout, depth, k);
+            std::vector<double> at;
+            for (const auto& t : timings) {
+              at.push_back(intact.contact_s +
+                           (t.revolutions ? t.value * 60.0 / rpm : t.value * span));
+            }
+            for (std::size_t k = 0; k < at.size(); ++k) {
+              std::fprintf(stderr, "\r%4.0f rpm, %2.0f mm, runout %2.0f um, %.2f mm, break %s   ",
+                           rpm, width, runout, depth, timings[k].label.c_str());
               auto broken = raw;
               auto* b = broken.mutable_simulation()->add_tooth_breaks();
               b->set_tooth(static_cast<uint32_t>(tooth));
@@ -305,9 +338,10 @@ int main(int argc, char** argv) {
           all_revs += revs;
           all_false += falses;
           all_max = std::max(all_max, max_score);
-          std::printf("%6.0f %6.0f %6.0f %7.2f %5d %9llu %7d %9.3f %9.2f %9.2f %9.2f %7d\n", rpm,
-                      width, runout, depth, runs, static_cast<unsigned long long>(revs), falses,
-                      max_score, delay[0], delay[1], delay[2], missed);
+          std::printf("%6.0f %6.0f %6.0f %7.2f %5d %9llu %7d %9.3f", rpm, width, runout, depth,
+                      runs, static_cast<unsigned long long>(revs), falses, max_score);
+          for (const double d : delay) std::printf(" %9.2f", d);
+          std::printf(" %7d\n", missed);
           std::fflush(stdout);
         }
       }
