@@ -2,7 +2,8 @@
 //
 // The edge's loop on LinuxCNC under an allocation guard: the core with the
 // LinuxCNC drive, one tick per servo record (wait, read, modules,
-// supervisors, feed pins, heartbeat, and a rewrite's hand-over request) for
+// supervisors, feed pins, heartbeat, and a rewrite's or a speed change's
+// hand-over request) for
 // SECONDS of machine time or to the program's end. Prints one JSON object
 // with the ticks run and the operator-new calls the loop thread made in
 // them (which must be 0). Run as LinuxCNC's user (deploy/linuxcnc/run.sh
@@ -45,12 +46,14 @@ int main(int argc, char** argv) {
       }
       allocations = guard.violations();
     }
+    // "rewrites": the program's revisions (a rewrite or a speed change);
+    // "rpm": the spindle's measured speed at the end.
     std::printf(
         "{\"ticks\": %llu, \"allocations\": %llu, \"rewrites\": %u, \"lost\": %llu, "
-        "\"fault\": \"%s\"}\n",
+        "\"rpm\": %.0f, \"fault\": \"%s\"}\n",
         static_cast<unsigned long long>(ticks), static_cast<unsigned long long>(allocations),
         core.program().revision, static_cast<unsigned long long>(drive.lost_samples()),
-        drive.fault().c_str());
+        core.drive_sample().spindle_rpm, drive.fault().c_str());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "smc-linuxcnc-rt-probe: %s\n", e.what());

@@ -159,17 +159,29 @@ std::string smc2_plus_refusal(const PlanInputs& in) {
   }
   if (in.machine.id.empty()) return "no machine was given";
   if (!machine_can_change_spindle_speed(in.machine)) {
-    return in.machine.id + "'s " + in.machine.drive + " drive cannot override its spindle speed";
+    if (!drive_overrides_spindle_speed(in.machine.drive)) {
+      return in.machine.id + "'s " + in.machine.drive + " drive cannot override its spindle speed";
+    }
+    return in.machine.id + "'s spindle has no speed range to move in (" +
+           fmt(in.machine.min_spindle_rpm) + " to " + fmt(in.machine.max_spindle_rpm) + " rpm)";
   }
   return {};
 }
 
 }  // namespace
 
+bool drive_overrides_spindle_speed(const std::string& drive) {
+  // Both drives implement it: the simulated mill, and LinuxCNC's spindle
+  // override (edge/README.md, module O).
+  return drive.empty() || drive == "simulated" || drive == "linuxcnc";
+}
+
 bool machine_can_change_spindle_speed(const store::Machine& m) {
-  // The simulated mill implements the speed override; the LinuxCNC drive
-  // does not yet (edge/README.md, module O).
-  return m.drive.empty() || m.drive == "simulated";
+  // O skips a speed within 2 % of the present one: a spindle whose range is
+  // narrower (a fixed-speed spindle) has nowhere to go. No maximum given:
+  // no limit known.
+  const bool range = m.max_spindle_rpm <= 0 || m.max_spindle_rpm > 1.02 * m.min_spindle_rpm;
+  return drive_overrides_spindle_speed(m.drive) && range;
 }
 
 Selection select_variant(const PlanInputs& in) {

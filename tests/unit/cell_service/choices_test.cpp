@@ -343,15 +343,18 @@ TEST(Selection, APartAllowingASpeedChangeOnASimulatedMillIsSmcIIPlus) {
   EXPECT_NE(sel.explanation.find("SMC II+ on mill-1"), std::string::npos) << sel.explanation;
   EXPECT_NE(sel.explanation.find("allows a speed change"), std::string::npos) << sel.explanation;
   EXPECT_NE(sel.explanation.find("no validated models"), std::string::npos) << sel.explanation;
-  // The LinuxCNC drive has no speed override: SMC II, saying why not II+.
+  // The LinuxCNC drive has the override (LinuxCNC's spindle override).
   in.machine.drive = "linuxcnc";
-  const auto cnc = cell::select_variant(in);
-  EXPECT_EQ(cnc.variant, cfg::SMC_II);
-  EXPECT_NE(cnc.explanation.find("Not SMC II+: mill-1's linuxcnc drive cannot override"),
+  EXPECT_EQ(cell::select_variant(in).variant, cfg::SMC_II_PLUS);
+  // A fixed-speed spindle has nowhere to go: SMC II, saying why not II+.
+  in.machine.min_spindle_rpm = in.machine.max_spindle_rpm = 1500;
+  const auto fixed = cell::select_variant(in);
+  EXPECT_EQ(fixed.variant, cfg::SMC_II);
+  EXPECT_NE(fixed.explanation.find("Not SMC II+: mill-1's spindle has no speed range to move in"),
             std::string::npos)
-      << cnc.explanation;
+      << fixed.explanation;
   // A part that does not allow it: SMC II, and II+ is not mentioned.
-  in.machine.drive = "simulated";
+  in.machine = mill("mill-1");
   in.part.speed_change_allowed = false;
   const auto plain = cell::select_variant(in);
   EXPECT_EQ(plain.variant, cfg::SMC_II);
@@ -359,20 +362,20 @@ TEST(Selection, APartAllowingASpeedChangeOnASimulatedMillIsSmcIIPlus) {
 }
 
 TEST(Binding, SmcIIPlusIsBoundToAMachineThatCanChangeItsSpindleSpeed) {
-  cell::MachineModels cnc{mill("mill-1"), true, {}};
-  cnc.machine.drive = "linuxcnc";
+  cell::MachineModels fixed{mill("mill-1"), true, {}};  // a fixed-speed spindle
+  fixed.machine.min_spindle_rpm = fixed.machine.max_spindle_rpm = 1500;
   cell::MachineModels sim{mill("mill-2"), true, {}};
   cell::PlanInputs in;
   in.part.id = "cover";
   in.part.speed_change_allowed = true;
-  const auto sel = cell::bind_and_select(in, {cnc, sim});
+  const auto sel = cell::bind_and_select(in, {fixed, sim});
   EXPECT_EQ(sel.variant, cfg::SMC_II_PLUS);
   EXPECT_EQ(in.machine.id, "mill-2");
-  // Only the CNC: SMC II on any machine.
-  cell::PlanInputs only_cnc;
-  only_cnc.part = in.part;
-  EXPECT_EQ(cell::bind_and_select(only_cnc, {cnc}).variant, cfg::SMC_II);
-  EXPECT_TRUE(only_cnc.machine.id.empty());
+  // Only the fixed-speed spindle: SMC II on any machine.
+  cell::PlanInputs only_fixed;
+  only_fixed.part = in.part;
+  EXPECT_EQ(cell::bind_and_select(only_fixed, {fixed}).variant, cfg::SMC_II);
+  EXPECT_TRUE(only_fixed.machine.id.empty());
 }
 
 // A model is used only inside its validity range; the explanation says why

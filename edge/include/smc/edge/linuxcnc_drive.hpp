@@ -18,6 +18,10 @@
 //              hand LinuxCNC the remainder at a safe point: motion stopped,
 //              program aborted, the remainder's G-code opened and run (it
 //              retracts to the safe Z before it moves in X).
+//   change_spindle_speed()  real-time: asks the control thread to set
+//              LinuxCNC's spindle override to the new speed over the
+//              program's (module O; reset to 1 at the job's start and when
+//              a rewrite's remainder, which carries the new speed, runs).
 //
 // Pacing: the edge's loop runs once per servo record (wait_sample()), so it
 // runs in step with LinuxCNC's servo thread rather than with its own clock.
@@ -61,6 +65,10 @@ class LinuxCncDrive final : public Drive {
   void load(const FixedProgram& program) override;
   Status step(double feedrate_cmd_mm_s, DriveSample& out) noexcept override;
   Status rewrite(const FixedProgram& program, int from) noexcept override;
+  // Module O's speed change: LinuxCNC's spindle override, set by the
+  // control thread (a hand-over like rewrite's; real-time here).
+  bool can_change_spindle_speed() const noexcept override { return true; }
+  Status change_spindle_speed(double rpm) noexcept override;
   double sample_period_s() const noexcept override { return period_s_; }
 
   // The loop's pacing: true once a servo record waits, false after the

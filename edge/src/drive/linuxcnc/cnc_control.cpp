@@ -143,6 +143,15 @@ void CncControl::abort() {
   impl_->send(a, "abort");
 }
 
+void CncControl::set_spindle_override(double scale) {
+  EMC_TRAJ_SET_SPINDLE_SCALE m;
+  m.spindle = 0;
+  m.scale = scale;
+  // Waits for receipt only: while a program runs the task's status stays
+  // "executing" until the program ends, as for run().
+  impl_->send(m, "set the spindle override", false);
+}
+
 std::vector<std::string> CncControl::take_errors() {
   std::vector<std::string> out;
   for (;;) {

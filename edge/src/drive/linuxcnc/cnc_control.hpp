@@ -48,6 +48,10 @@ class CncControl {
   void run();
   // Stops the program and any motion (EMC_TASK_ABORT).
   void abort();
+  // The spindle override: the programmed speed times `scale`
+  // (EMC_TRAJ_SET_SPINDLE_SCALE, spindle 0). It stays until changed, also
+  // across programs.
+  void set_spindle_override(double scale);
   // LinuxCNC's operator and NML error messages since the last call.
   std::vector<std::string> take_errors();
 

@@ -79,6 +79,10 @@ struct LinuxCncDrive::Impl {
   std::atomic<int> rewrite_asked{0};  // generation
   FixedProgram rewrite_program;       // written by the loop before rewrite_asked
   int rewrite_from = 0;
+  // O's speed change: the override on the programmed speed, and its
+  // generation.
+  std::atomic<double> speed_scale{1.0};
+  std::atomic<int> speed_asked{0};
   // Control thread → loop.
   std::atomic<int> rewrite_done{0};
   std::atomic<bool> done{false};
@@ -223,6 +227,8 @@ void LinuxCncDrive::Impl::control_loop() {
   while (!stop && !loop_live) std::this_thread::sleep_for(1ms);
   if (stop) return;
   try {
+    // A speed change of an earlier job stays in LinuxCNC until changed.
+    cnc->set_spindle_override(1.0);
     cnc->run();
     spdlog::info("{}: LinuxCNC runs {}", opt.machine_id, last_path);
   } catch (const std::exception& e) {
@@ -230,6 +236,7 @@ void LinuxCncDrive::Impl::control_loop() {
     return;
   }
   int handled = 0;
+  int speed_handled = 0;
   int idle_polls = 0;
   while (!stop) {
     std::this_thread::sleep_for(5ms);
@@ -260,6 +267,19 @@ void LinuxCncDrive::Impl::control_loop() {
       }
       return;
     }
+    const int speed = speed_asked.load(std::memory_order_acquire);
+    if (speed != speed_handled) {
+      const double scale = speed_scale.load(std::memory_order_relaxed);
+      try {
+        cnc->set_spindle_override(scale);
+        spdlog::info("{}: LinuxCNC's spindle override set to {:.3f} (module O)", opt.machine_id,
+                     scale);
+      } catch (const std::exception& e) {
+        set_fault(CncFault::kLinuxCnc, std::string("setting the spindle override: ") + e.what());
+        return;
+      }
+      speed_handled = speed;
+    }
     const int asked = rewrite_asked.load(std::memory_order_acquire);
     if (asked != handled) {
       // A safe point: the feed is held by the loop; wait for standstill.
@@ -270,6 +290,9 @@ void LinuxCncDrive::Impl::control_loop() {
         const std::string path = write_program(rewrite_program, rewrite_from, m);
         cnc->open_program(path);
         map_index.store(1 - map_index.load(), std::memory_order_release);
+        // The remainder's G-code carries the speed O chose: no override on it.
+        cnc->set_spindle_override(1.0);
+        speed_handled = speed_asked.load(std::memory_order_acquire);
         cnc->run();
         spdlog::info("{}: LinuxCNC runs the rewritten program {} from pass {}", opt.machine_id,
                      path, rewrite_from + 1);
@@ -399,6 +422,22 @@ Status LinuxCncDrive::rewrite(const FixedProgram& program, int from) noexcept {
   d.pass = from;
   d.in_pass = false;
   d.rewrite_asked.fetch_add(1, std::memory_order_release);
+  return Status::kOk;
+}
+
+Status LinuxCncDrive::change_spindle_speed(double rpm) noexcept {
+  Impl& d = *impl_;
+  if (!(rpm > 0) || !std::isfinite(rpm) || !d.stream || d.program.count <= 0) {
+    return Status::kError;
+  }
+  // LinuxCNC runs the program the drive last handed it: the override is
+  // on that program's speed for the pass in progress (a plan's passes share
+  // one speed; a rewrite's remainder carries the new one).
+  const int pass = std::clamp(d.pass, 0, d.program.count - 1);
+  const double programmed = d.program.passes[static_cast<std::size_t>(pass)].spindle_rpm;
+  if (!(programmed > 0)) return Status::kError;
+  d.speed_scale.store(rpm / programmed, std::memory_order_relaxed);
+  d.speed_asked.fetch_add(1, std::memory_order_release);
   return Status::kOk;
 }
 

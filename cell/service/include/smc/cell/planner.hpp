@@ -57,8 +57,12 @@ struct Selection {
 // SMC II+ when the part allows it.
 Selection select_variant(const PlanInputs& in);
 
-// The machine's drive has a spindle speed override (module O): the
-// simulated mill has; the LinuxCNC drive has not yet.
+// Whether a drive has a spindle speed override (module O): the simulated
+// mill and the LinuxCNC drive have.
+bool drive_overrides_spindle_speed(const std::string& drive);
+// Whether module O can move this machine's spindle: its drive has the
+// override and its speed range is more than 2 % wide (not a fixed-speed
+// spindle).
 bool machine_can_change_spindle_speed(const store::Machine& m);
 
 // Binds the job to a machine and selects its variant: the job's own machine
