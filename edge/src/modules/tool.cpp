@@ -60,8 +60,9 @@ void ToolBreakageDetector::reset() noexcept {
 
 void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   const int n = p_.teeth;
-  // Settled: the windows have been compared for kSettleRevolutions.
-  if (closed_ < kSettleRevolutions * n) return;
+  // Settling: the windows have been compared for fewer than
+  // kSettleRevolutions (the controller's entry transient moves them).
+  const bool settling = closed_ < kSettleRevolutions * n;
   double total = 0;
   for (int k = 0; k < n; ++k) total += previous_[k];
   const double window_mean = total / n;
@@ -98,6 +99,18 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   const double drop = (excess - trend) / window_mean;
   if (excess - trend < kSpreadFactor * spread) return;
   if (s.tool_broken) return;
+  const bool leaving = s.engagement < most_engaged_ - 1e-9;
+  // While settling only a certain fall counts: more than kCertainDrop of a
+  // mean window, alone, not leaving the part. A tooth that breaks then is
+  // compared with its broken self afterwards and would never be seen.
+  if (settling) {
+    if (drop > kCertainDrop && !leaving) {
+      s.tool_broken = true;
+      s.breakage_window = window_;
+      s.breakage_drop = drop;
+    }
+    return;
+  }
   // Suspects. A feed that fell through the revolution before this window
   // (the controller's entry transient) takes the chip from the teeth that
   // cut least first when the cutter runs out; the cutter leaving the part
@@ -107,8 +120,9 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   // another window's rise (above). A break makes the controller lower the
   // feed only after it, so the revolution before it was steady. Holds do not
   // reach N: it is active only in the cutting step.
-  const bool leaving = s.engagement < most_engaged_ - 1e-9;
-  if (feed_before_[window_] < (1.0 - kFeedFall) * feed_before2_[window_] || leaving) {
+  // A certain fall is a break however the feed moved.
+  const bool certain = drop > kCertainDrop && !leaving;
+  if (!certain && (feed_before_[window_] < (1.0 - kFeedFall) * feed_before2_[window_] || leaving)) {
     if (drop > p_.breakage_threshold && (suspect_window_ < 0 || suspect_window_ == window_)) {
       if (suspect_window_ < 0) suspect_closed_ = closed_;
       suspect_window_ = window_;

@@ -607,6 +607,43 @@ TEST(ToolBreakageDetector, AfterAFallingFeedAFallMustBeTakenUpByAnotherTooth) {
   EXPECT_EQ(cut.s.breakage_window, 1);
 }
 
+// In the first compared revolutions (the controller's entry transient) and
+// while the feed falls, a fall needs another window to take the chip up --
+// unless it is certain: more than 0.9 of a mean window, alone. A tooth that
+// breaks at entry is compared with its broken self afterwards, so it is
+// seen then or never.
+TEST(ToolBreakageDetector, ACertainFallIsABreakWhileSettlingAndWhileTheFeedFalls) {
+  const double intact[4] = {300, 300, 300, 300};
+  {
+    ToothCut cut;  // the second compared revolution: still settling
+    ASSERT_EQ(cut.revolution(intact), -1);
+    ASSERT_EQ(cut.revolution(intact), -1);
+    const double lost[4] = {300, 20, 300, 300};  // no window takes the chip
+    EXPECT_GE(cut.revolution(lost), 0) << "a certain fall while settling";
+    EXPECT_EQ(cut.s.breakage_window, 1);
+    EXPECT_GT(cut.s.breakage_drop, 0.9);
+  }
+  {
+    ToothCut cut;
+    ASSERT_EQ(cut.revolution(intact), -1);
+    ASSERT_EQ(cut.revolution(intact), -1);
+    const double less[4] = {300, 120, 300, 300};  // 0.6 of a mean window
+    for (int r = 0; r < 4; ++r) EXPECT_EQ(cut.revolution(less), -1) << "settling: " << r;
+  }
+  {
+    ToothCut cut;
+    double level[4] = {420, 330, 180, 270};
+    for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(level), -1);
+    cut.s.feed_per_tooth_cmd_mm = 0.08;
+    const double falling[4] = {400, 310, 160, 250};
+    EXPECT_EQ(cut.revolution(falling), -1);
+    cut.s.feed_per_tooth_cmd_mm = 0.06;
+    const double broken[4] = {395, 10, 160, 250};  // 300 N of a 280 N mean window
+    EXPECT_GE(cut.revolution(broken), 0) << "a certain fall while the feed falls";
+    EXPECT_EQ(cut.s.breakage_window, 1);
+  }
+}
+
 TEST(ToolBreakageDetector, AGapInTheSamplesRestartsTheComparison) {
   ToothCut cut;
   const double intact[4] = {300, 300, 300, 300};

@@ -775,6 +775,28 @@ TEST(SmcTwoPlus, AnIdentificationSegmentIsNoBrokenToothAndHidesNone) {
   }
 }
 
+// A tooth that breaks as the cutter enters the part, while N's comparisons
+// are settling and the controller lowers the feed: seen within a revolution
+// (it is compared with its broken self afterwards, so then or never).
+TEST(SmcTwoPlus, AToothBrokenAtEntryIsSeenWithinARevolution) {
+  auto intact = run_paper("smc2_plus.textproto");
+  ASSERT_GT(intact->summary.passes_size(), 0);
+  const double contact = intact->summary.passes(0).contact_s();
+  ASSERT_GT(contact, 0);
+  const double rev = 60.0 / 1500;
+  for (const double after : {1.5, 2.5, 3.5, 4.5}) {
+    const double break_s = contact + after * rev;
+    auto r = run_paper("smc2_plus.textproto", {}, [&](smc::config::SupervisorConfig& c) {
+      auto* b = c.mutable_simulation()->add_tooth_breaks();
+      b->set_tooth(2);
+      b->set_at_s(break_s);
+    });
+    const double seen = r->summary.tool_broken_s();
+    ASSERT_GE(seen, break_s) << after << " revolutions after contact: not seen";
+    EXPECT_LE(seen - break_s, rev) << after << " revolutions after contact";
+  }
+}
+
 TEST(SmcTwoPlus, NoHeapAllocationThroughASpeedChangeAndABreakage) {
   auto raw = test::shipped_config("smc2_plus.textproto");
   add_identification(raw);  // the segment's ramps and levels on the path too

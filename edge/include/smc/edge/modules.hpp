@@ -393,6 +393,7 @@ class ToolBreakageDetector final : public Module {
   double change_before_[kMaxTeeth] = {};        // each window's change the revolution before
   static constexpr double kSpreadFactor = 2.0;  // a break's fall x the others' spread
   static constexpr int kSettleRevolutions = 3;  // compared revolutions before a decision
+  static constexpr double kCertainDrop = 0.9;   // ... but for a fall this large (x mean window)
   static constexpr double kFloorShare = 0.75;   // judged above this x the contact threshold
   static constexpr double kFeedFall = 0.05;     // a suspect after the feed fell more than this
   static constexpr double kConfirmShare = 0.5;  // x threshold x mean window: the chip taken
