@@ -100,8 +100,14 @@ for t in "${targets[@]}"; do
     echo "replay: $bin/$t $artifacts/<crash file>" >&2
     exit 1
   fi
-  # With --jobs, each worker's statistics are in fuzz-N.log beside the run.
-  execs=$(cat "$log" "$work"/fuzz-*.log | awk '/stat::number_of_executed_units/ {s += $2} END {print s + 0}')
+  # With --jobs, each job's statistics are in fuzz-N.log beside the run, and
+  # libFuzzer copies each job's log into the run's log when the job ends:
+  # count them once, from the jobs' logs when there are any.
+  if compgen -G "$work/fuzz-*.log" >/dev/null; then
+    execs=$(cat "$work"/fuzz-*.log | awk '/stat::number_of_executed_units/ {s += $2} END {print s + 0}')
+  else
+    execs=$(awk '/stat::number_of_executed_units/ {s += $2} END {print s + 0}' "$log")
+  fi
   rm -f "$work"/fuzz-*.log
   rate=$(grep -ho "exec/s: [0-9]*" "$log" | tail -1 | awk '{print $2}')
   printf "%-16s %12s %10s %8s\n" "$t" "$execs" "$rate" "$(ls "$corpus" | wc -l)"
