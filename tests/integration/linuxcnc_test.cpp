@@ -773,13 +773,18 @@ TEST_F(LinuxCncDyno, ASpeedChangeThroughTheSpindleOverrideSuppressesThePapersCha
 // chatter, the rewrite's hand-over; under SMC II+ the speed change's) under
 // an allocation guard, as LinuxCNC's user (smc-linuxcnc-rt-probe).
 TEST_F(LinuxCncDyno, TheLoopOnLinuxCncNeverAllocates) {
+  // The probe's JSON for a configuration run for some seconds.
+  auto probe = [&](const std::string& config, int seconds, int* st) {
+    const std::string json =
+        as_mill(smc::test::bin_path("smc-linuxcnc-rt-probe") + " " + src("edge/configs/" + config) +
+                    " " + std::to_string(seconds) + " " + (dir_ / "programs").string(),
+                st);
+    std::printf("%s", json.c_str());
+    return json;
+  };
   int st = -1;
-  const std::string json =
-      as_mill(smc::test::bin_path("smc-linuxcnc-rt-probe") + " " +
-                  src("edge/configs/smc2.textproto") + " 14 " + (dir_ / "programs").string(),
-              &st);
+  const std::string json = probe("smc2.textproto", 14, &st);
   ASSERT_EQ(st, 0) << json;
-  std::printf("%s", json.c_str());
   EXPECT_EQ(numbers_after(json, "ticks"), std::vector<double>{28000}) << json;
   EXPECT_EQ(numbers_after(json, "allocations"), std::vector<double>{0}) << json;
   EXPECT_EQ(numbers_after(json, "rewrites"), std::vector<double>{1})
@@ -787,12 +792,8 @@ TEST_F(LinuxCncDyno, TheLoopOnLinuxCncNeverAllocates) {
   EXPECT_EQ(numbers_after(json, "lost"), std::vector<double>{0}) << json;
   // SMC II+: the chatter's speed change goes through the same hand-over
   // (LinuxCNC's spindle override), under the same guard.
-  const std::string plus =
-      as_mill(smc::test::bin_path("smc-linuxcnc-rt-probe") + " " +
-                  src("edge/configs/smc2_plus.textproto") + " 10 " + (dir_ / "programs").string(),
-              &st);
+  const std::string plus = probe("smc2_plus.textproto", 10, &st);
   ASSERT_EQ(st, 0) << plus;
-  std::printf("%s", plus.c_str());
   EXPECT_EQ(numbers_after(plus, "allocations"), std::vector<double>{0}) << plus;
   EXPECT_EQ(numbers_after(plus, "rewrites"), std::vector<double>{1}) << "a speed change: " << plus;
   const auto rpm = numbers_after(plus, "rpm");

@@ -528,6 +528,17 @@ struct ToothCut {
     }
     return -1;
   }
+  // Runout (unequal windows) for 6 revolutions, then a revolution in which
+  // the feed falls (0.1 to 0.08 mm/tooth) and every window with it; the
+  // feed goes on falling (0.06) into the next revolution.
+  void runout_then_falling_feed() {
+    const double level[4] = {420, 330, 180, 270};
+    for (int r = 0; r < 6; ++r) ASSERT_EQ(revolution(level), -1);
+    s.feed_per_tooth_cmd_mm = 0.08;
+    const double falling[4] = {400, 310, 160, 250};
+    EXPECT_EQ(revolution(falling), -1);
+    s.feed_per_tooth_cmd_mm = 0.06;
+  }
 };
 
 }  // namespace
@@ -588,12 +599,7 @@ TEST(ToolBreakageDetector, AfterAFallingFeedAFallMustBeTakenUpByAnotherTooth) {
   // With runout and a feed falling for a revolution, the least-loaded tooth's
   // chip goes first: its window falls alone, no window rises. Not a break.
   ToothCut cut;
-  double level[4] = {420, 330, 180, 270};
-  for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(level), -1);
-  cut.s.feed_per_tooth_cmd_mm = 0.08;
-  const double falling[4] = {400, 310, 160, 250};
-  EXPECT_EQ(cut.revolution(falling), -1);
-  cut.s.feed_per_tooth_cmd_mm = 0.06;
+  cut.runout_then_falling_feed();
   const double lost[4] = {380, 290, 40, 230};
   EXPECT_EQ(cut.revolution(lost), -1) << "a chip lost to the falling feed";
   EXPECT_EQ(cut.revolution(lost), -1);
@@ -632,12 +638,7 @@ TEST(ToolBreakageDetector, ACertainFallIsABreakWhileSettlingAndWhileTheFeedFalls
   }
   {
     ToothCut cut;
-    double level[4] = {420, 330, 180, 270};
-    for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(level), -1);
-    cut.s.feed_per_tooth_cmd_mm = 0.08;
-    const double falling[4] = {400, 310, 160, 250};
-    EXPECT_EQ(cut.revolution(falling), -1);
-    cut.s.feed_per_tooth_cmd_mm = 0.06;
+    cut.runout_then_falling_feed();
     const double broken[4] = {395, 10, 160, 250};  // 300 N of a 280 N mean window
     EXPECT_GE(cut.revolution(broken), 0) << "a certain fall while the feed falls";
     EXPECT_EQ(cut.s.breakage_window, 1);
