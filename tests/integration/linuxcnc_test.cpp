@@ -768,6 +768,34 @@ TEST_F(LinuxCncDyno, ASpeedChangeThroughTheSpindleOverrideSuppressesThePapersCha
   EXPECT_NEAR(override_now(), 1.0, 1e-9);
 }
 
+// Module N on LinuxCNC: a tooth breaks in the steady cut (the dynamometer's
+// break-tooth pin) under SMC II+; N stops the feed, the run ends with the
+// tool broken (exit status 5), and LinuxCNC's axis stands still.
+TEST_F(LinuxCncDyno, ABrokenToothStopsTheFeedOnLinuxCnc) {
+  int st = -1;
+  std::string out;
+  std::thread run(
+      [&] { out = simulate(src("edge/configs/smc2_plus.textproto"), "broken", &st, 30); });
+  JoinOnExit join{run};
+  ASSERT_TRUE(wait_cutting());
+  // Into the steady cut, before the paper's chatter (detected about 4.4 s
+  // after first contact here).
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  int hs = -1;
+  const std::string h = as_mill("halcmd setp smc-dyno.break-tooth 2", &hs);
+  ASSERT_EQ(hs, 0) << h;
+  run.join();
+  EXPECT_EQ(st, 5) << "the tool broke: " << out;
+  EXPECT_NE(out.find("the tool broke"), std::string::npos) << out;
+  EXPECT_EQ(pin("motion.current-vel"), 0.0) << "the axis stands still";
+  std::ifstream summary((dir_ / "broken" / "summary.json").string());
+  const std::string json((std::istreambuf_iterator<char>(summary)), {});
+  EXPECT_EQ(numbers_after(json, "chatter_events"), std::vector<double>{0}) << json;
+  const auto broken = numbers_after(json, "tool_broken_s");
+  ASSERT_EQ(broken.size(), 1u) << json;
+  EXPECT_GT(broken[0], 0) << json;
+}
+
 // The real-time path on LinuxCNC never allocates: the core with the
 // LinuxCNC drive runs the paper's job-shop cut (contact, force control,
 // chatter, the rewrite's hand-over; under SMC II+ the speed change's) under

@@ -28,6 +28,9 @@
 //   in  float x-mm, z-mm       tool position (joint feedback)
 //   in  float spindle-rps      spindle speed (rev/s)
 //   in  bit   new-part         rising edge: a fresh blank
+//   in  s32   break-tooth      set to a tooth (1-based): that tooth loses its
+//                              edge from this period on (as the simulated
+//                              mill's simulation.tooth_breaks); 0: none
 //   out float force-x/y/z      force on the tool (N), filtered, with noise
 //   out float power-w          spindle (cutting) power at the sample instant
 //   out float depth-mm         depth of cut at the cutter's leading edge
@@ -80,6 +83,7 @@ struct Pins {
   hal_float_t* z_mm;
   hal_float_t* spindle_rps;
   hal_bit_t* new_part;
+  hal_s32_t* break_tooth;
   hal_float_t* force_x;
   hal_float_t* force_y;
   hal_float_t* force_z;
@@ -104,6 +108,7 @@ struct Dyno {
   double last_x = 0;
   bool have_x = false;
   bool last_new_part = false;
+  int broken_tooth = 0;  // the last tooth broken by the break-tooth pin
   long period_ns = 0;
 
   Dyno(mc::MillingModel m, const mc::SimulatorOptions& o) : model(std::move(m)), sim(model, o) {}
@@ -183,6 +188,13 @@ void update(void* /*arg*/, long period) {
   const bool np = *p.new_part;
   if (np && !d.last_new_part) d.fresh_blank();
   d.last_new_part = np;
+  // A tooth set on break-tooth loses its edge (1 mm back, as a lost edge in
+  // the simulated mill), once per setting.
+  const int tooth = *p.break_tooth;
+  if (tooth != d.broken_tooth && tooth >= 1 && tooth <= d.model.cutter.teeth) {
+    d.sim.set_tooth_runout_mm(tooth - 1, d.sim.tooth_runout_mm(tooth - 1) - 1.0);
+  }
+  d.broken_tooth = tooth;
 
   const double x = *p.x_mm;
   const double z = *p.z_mm;
@@ -246,6 +258,7 @@ int make_pins(int comp) {
   r |= hal_pin_float_new("smc-dyno.z-mm", HAL_IN, &p.z_mm, comp);
   r |= hal_pin_float_new("smc-dyno.spindle-rps", HAL_IN, &p.spindle_rps, comp);
   r |= hal_pin_bit_new("smc-dyno.new-part", HAL_IN, &p.new_part, comp);
+  r |= hal_pin_s32_new("smc-dyno.break-tooth", HAL_IN, &p.break_tooth, comp);
   r |= hal_pin_float_new("smc-dyno.force-x", HAL_OUT, &p.force_x, comp);
   r |= hal_pin_float_new("smc-dyno.force-y", HAL_OUT, &p.force_y, comp);
   r |= hal_pin_float_new("smc-dyno.force-z", HAL_OUT, &p.force_z, comp);
