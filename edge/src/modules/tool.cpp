@@ -100,17 +100,12 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   if (excess - trend < kSpreadFactor * spread) return;
   if (s.tool_broken) return;
   const bool leaving = s.engagement < most_engaged_ - 1e-9;
-  // While settling only a certain fall counts: more than kCertainDrop of a
-  // mean window, alone, not leaving the part. A tooth that breaks then is
-  // compared with its broken self afterwards and would never be seen.
-  if (settling) {
-    if (drop > kCertainDrop && !leaving) {
-      s.tool_broken = true;
-      s.breakage_window = window_;
-      s.breakage_drop = drop;
-    }
-    return;
-  }
+  // A certain fall: more than kCertainDrop of a mean window, alone, not
+  // leaving the part. Only such a fall decides while settling, and it is a
+  // break however the feed moved: a tooth that breaks then is compared with
+  // its broken self afterwards and would never be seen.
+  const bool certain = drop > kCertainDrop && !leaving;
+  if (settling && !certain) return;
   // Suspects. A feed that fell through the revolution before this window
   // (the controller's entry transient) takes the chip from the teeth that
   // cut least first when the cutter runs out; the cutter leaving the part
@@ -120,8 +115,6 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   // another window's rise (above). A break makes the controller lower the
   // feed only after it, so the revolution before it was steady. Holds do not
   // reach N: it is active only in the cutting step.
-  // A certain fall is a break however the feed moved.
-  const bool certain = drop > kCertainDrop && !leaving;
   if (!certain && (feed_before_[window_] < (1.0 - kFeedFall) * feed_before2_[window_] || leaving)) {
     if (drop > p_.breakage_threshold && (suspect_window_ < 0 || suspect_window_ == window_)) {
       if (suspect_window_ < 0) suspect_closed_ = closed_;
