@@ -769,9 +769,10 @@ TEST_F(LinuxCncDyno, ASpeedChangeThroughTheSpindleOverrideSuppressesThePapersCha
 }
 
 // Module N on LinuxCNC: a tooth breaks in the steady cut (the dynamometer's
-// break-tooth pin) under SMC II+; N stops the feed, the run ends with the
-// tool broken (exit status 5), and LinuxCNC's axis stands still.
-TEST_F(LinuxCncDyno, ABrokenToothStopsTheFeedOnLinuxCnc) {
+// break-tooth pin) under SMC II+; N stops the feed, the drive lifts the tool
+// to the safe Z, the run ends with the tool broken (exit status 5), and
+// LinuxCNC's axes stand still.
+TEST_F(LinuxCncDyno, ABrokenToothStopsTheFeedAndLiftsTheToolOnLinuxCnc) {
   int st = -1;
   std::string out;
   std::thread run(
@@ -781,12 +782,19 @@ TEST_F(LinuxCncDyno, ABrokenToothStopsTheFeedOnLinuxCnc) {
   // Into the steady cut, before the paper's chatter (detected about 4.4 s
   // after first contact here).
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const double z_cut = pin("joint.2.pos-fb");
   int hs = -1;
   const std::string h = as_mill("halcmd setp smc-dyno.break-tooth 2", &hs);
   ASSERT_EQ(hs, 0) << h;
   run.join();
   EXPECT_EQ(st, 5) << "the tool broke: " << out;
   EXPECT_NE(out.find("the tool broke"), std::string::npos) << out;
+  // The drive lifted the tool clear: LinuxCNC's program aborted, a rapid to
+  // the programs' safe Z (10 mm above the part's top) in MDI.
+  EXPECT_LT(z_cut, 0.0) << "the tool was in the part";
+  EXPECT_NEAR(pin("joint.2.pos-fb"), 10.0, 0.01) << out;
+  EXPECT_EQ(pin("smc-dyno.teeth-in-cut"), 0.0) << "clear of the part";
+  EXPECT_NE(out.find("LinuxCNC lifted it"), std::string::npos) << out;
   EXPECT_EQ(pin("motion.current-vel"), 0.0) << "the axis stands still";
   std::ifstream summary((dir_ / "broken" / "summary.json").string());
   const std::string json((std::istreambuf_iterator<char>(summary)), {});
@@ -824,6 +832,10 @@ TEST_F(LinuxCncDyno, TheLoopOnLinuxCncNeverAllocates) {
   ASSERT_EQ(st, 0) << plus;
   EXPECT_EQ(numbers_after(plus, "allocations"), std::vector<double>{0}) << plus;
   EXPECT_EQ(numbers_after(plus, "rewrites"), std::vector<double>{1}) << "a speed change: " << plus;
+  // The second job on this LinuxCNC cuts a fresh blank (the first left the
+  // tool in its part): no material missing under the cutter, which N read
+  // as a broken tooth before the dynamometer waited for the tool to clear.
+  EXPECT_EQ(numbers_after(plus, "tool_broken"), std::vector<double>{0}) << plus;
   const auto rpm = numbers_after(plus, "rpm");
   ASSERT_EQ(rpm.size(), 1u) << plus;
   EXPECT_GT(rpm[0], 2500) << "the spindle moved to the new pocket: " << plus;

@@ -25,6 +25,15 @@ double median_of(const double* v, int n) noexcept {
 
 }  // namespace
 
+double ToolBreakageDetector::compared_median(int exclude, int& count) const noexcept {
+  double v[kMaxTeeth];
+  count = 0;
+  for (int k = 0; k < p_.teeth; ++k) {
+    if (k != exclude && compared_[k]) v[count++] = change_[k];
+  }
+  return count > 0 ? median_of(v, count) : 0.0;
+}
+
 void ToolBreakageDetector::configure(const EdgeParameters& p) {
   if (p.teeth > kMaxTeeth || p.teeth < 1) {
     throw ConfigError(common::Diagnostic{"supervisor_config.operation.teeth",
@@ -41,6 +50,8 @@ void ToolBreakageDetector::configure(const EdgeParameters& p) {
 
 void ToolBreakageDetector::restart() noexcept {
   std::fill(std::begin(have_previous_), std::end(have_previous_), false);
+  std::fill(std::begin(compared_), std::end(compared_), false);
+  pending_window_ = -1;
   std::fill(std::begin(change_), std::end(change_), 0.0);
   std::fill(std::begin(excess_), std::end(excess_), 0.0);
   std::fill(std::begin(excess_before_), std::end(excess_before_), 0.0);
@@ -67,8 +78,12 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   for (int k = 0; k < n; ++k) total += previous_[k];
   const double window_mean = total / n;
   if (window_mean < kFloorShare * p_.contact_threshold_n) return;  // too little force to judge
-  // The common change: the median of the windows' last changes.
-  const double median = median_of(change_, n);
+  // The common change: the median of the windows' last changes (of those
+  // compared since the (re)start: the others have none yet).
+  int peers = 0;  // the other windows compared since then
+  (void)compared_median(window_, peers);
+  int compared = 0;
+  const double median = compared_median(-1, compared);
   // A suspect (see below) is confirmed when another window has taken its
   // chip: risen beyond the common change by half the threshold's share of
   // the mean window (the lost chip shows concentrated in one window, the
@@ -93,7 +108,7 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   // falling the revolution before (one side of the cutter leaves first) is a
   // trend, not a break: that fall is taken off (a second difference).
   const int before = (window_ + n - 1) % n;
-  const double common = have_previous_[before] ? std::min(median, change_[before]) : median;
+  const double common = compared_[before] ? std::min(median, change_[before]) : median;
   const double excess = common - change;
   const double trend = std::max(0.0, excess_[window_]);
   const double drop = (excess - trend) / window_mean;
@@ -105,6 +120,17 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   // break however the feed moved: a tooth that breaks then is compared with
   // its broken self afterwards and would never be seen.
   const bool certain = drop > kCertainDrop && !leaving;
+  // Too few other windows compared yet (the first compared revolution after
+  // a (re)start) for a common change: a common fall (a feed running down)
+  // would look like a break in the first window. A certain fall waits for
+  // them (pending); nothing else decides.
+  if (peers < std::min(kMinPeers, n - 1)) {
+    if (certain && pending_window_ < 0) {
+      pending_window_ = window_;
+      pending_mean_ = window_mean;
+    }
+    return;
+  }
   if (settling && !certain) return;
   // Suspects. A feed that fell through the revolution before this window
   // (the controller's entry transient) takes the chip from the teeth that
@@ -148,6 +174,27 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   s.breakage_drop = drop;
 }
 
+void ToolBreakageDetector::judge_pending(Signals& s) noexcept {
+  const int w = pending_window_;
+  int peers = 0;
+  const double median = compared_median(w, peers);
+  if (peers < std::min(kMinPeers, p_.teeth - 1)) return;  // not yet
+  pending_window_ = -1;
+  // The pending window's whole fall against the others' median, and their
+  // spread about it: still certain, and alone.
+  double spread = 0;
+  for (int k = 0; k < p_.teeth; ++k) {
+    if (k != w && compared_[k]) spread = std::max(spread, std::fabs(change_[k] - median));
+  }
+  const double excess = median - change_[w];
+  const double drop = excess / pending_mean_;
+  if (s.tool_broken || drop <= kCertainDrop || excess < kSpreadFactor * spread) return;
+  largest_score_ = std::max(largest_score_, drop);
+  s.tool_broken = true;
+  s.breakage_window = w;
+  s.breakage_drop = drop;
+}
+
 void ToolBreakageDetector::close_window() noexcept {
   const int j = window_;
   const double mean = current_[static_cast<size_t>(count_ - 1)] / count_;
@@ -155,8 +202,13 @@ void ToolBreakageDetector::close_window() noexcept {
   excess_before_[j] = excess_[j];
   change_[j] = have_previous_[j] ? mean - previous_[j] : 0.0;
   // Its fall beyond the common change, for the next revolution's trend.
-  excess_[j] = have_previous_[j] ? median_of(change_, p_.teeth) - change_[j] : 0.0;
-  if (have_previous_[j]) ++closed_;
+  if (have_previous_[j]) {
+    compared_[j] = true;
+    ++closed_;
+  }
+  int compared = 0;
+  const double median = compared_median(-1, compared);
+  excess_[j] = have_previous_[j] ? median - change_[j] : 0.0;
   // A suspect no window confirmed within a revolution: not a break.
   if (suspect_window_ >= 0 && closed_ - suspect_closed_ > p_.teeth) clear_suspect();
   previous_[j] = mean;
@@ -178,7 +230,10 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
   const double phase = std::clamp(s.revolution_phase, 0.0, 1.0);
   const int w = std::min(n - 1, static_cast<int>(phase * n));
   if (w != window_) {
-    if (window_ >= 0 && count_ > 0 && !partial_) close_window();
+    if (window_ >= 0 && count_ > 0 && !partial_) {
+      close_window();
+      if (pending_window_ >= 0) judge_pending(s);
+    }
     partial_ = window_ < 0;
     window_ = w;
     count_ = 0;

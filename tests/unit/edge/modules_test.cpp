@@ -645,6 +645,41 @@ TEST(ToolBreakageDetector, ACertainFallIsABreakWhileSettlingAndWhileTheFeedFalls
   }
 }
 
+// After a restart (N was inactive: a hold, a speed change) the first windows
+// compared have no other compared windows to measure the common change by.
+// A feed running down then makes every window fall in turn; the first one
+// alone looked like a certain fall (seen on LinuxCNC, whose axes decelerate
+// where the simulated mill stops at once, after SMC II+'s speed change). A
+// certain fall there waits until two other windows are compared.
+TEST(ToolBreakageDetector, AfterARestartTheFirstWindowsWaitForACommonChange) {
+  const double intact[4] = {300, 300, 300, 300};
+  {
+    ToothCut cut;
+    for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
+    cut.t += 1.0;  // a gap: restart
+    ASSERT_EQ(cut.revolution(intact), -1);
+    const double running_down[4] = {20, 15, 10, 8};  // the feed stops: every window falls
+    EXPECT_EQ(cut.revolution(running_down), -1) << "a common fall, not a break";
+    EXPECT_FALSE(cut.s.tool_broken);
+  }
+  {
+    // A tooth that breaks in that first compared revolution is still seen
+    // once the windows after it are compared: here the first window compared
+    // (window 0 began the revolution after the gap, so it has nothing to be
+    // compared with yet) is decided as the last one closes, at the first
+    // sample of the next revolution, 3/4 of a revolution after the break.
+    ToothCut cut;
+    for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
+    cut.t += 1.0;
+    ASSERT_EQ(cut.revolution(intact), -1);
+    const double broken[4] = {300, 10, 300, 300};
+    ASSERT_EQ(cut.revolution(broken), -1);
+    EXPECT_EQ(cut.revolution(broken), 0) << "decided when two more windows are compared";
+    EXPECT_EQ(cut.s.breakage_window, 1);
+    EXPECT_GT(cut.s.breakage_drop, 0.9);
+  }
+}
+
 TEST(ToolBreakageDetector, AGapInTheSamplesRestartsTheComparison) {
   ToothCut cut;
   const double intact[4] = {300, 300, 300, 300};

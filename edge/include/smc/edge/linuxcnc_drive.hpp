@@ -18,6 +18,10 @@
 //              hand LinuxCNC the remainder at a safe point: motion stopped,
 //              program aborted, the remainder's G-code opened and run (it
 //              retracts to the safe Z before it moves in X).
+//   retract()  real-time: after a broken tool (module N), holds the feed and
+//              asks the control thread to lift the tool clear: motion
+//              stopped, program aborted, then a rapid to the programs' safe
+//              Z in MDI (the feed released for that move only).
 //   change_spindle_speed()  real-time: asks the control thread to set
 //              LinuxCNC's spindle override to the new speed over the
 //              program's (module O; reset to 1 at the job's start and when
@@ -70,6 +74,13 @@ class LinuxCncDrive final : public Drive {
   bool can_change_spindle_speed() const noexcept override { return true; }
   Status change_spindle_speed(double rpm) noexcept override;
   double sample_period_s() const noexcept override { return period_s_; }
+  // After a breakage: the tool lifted to the safe Z by the control thread
+  // (LinuxCNC's MDI). kOk when asked; the lift follows within about a
+  // second (lifted() says when it is done).
+  bool can_retract() const noexcept override { return true; }
+  Status retract() noexcept override;
+  // The lift retract() asked for is done (or failed: fault() says why).
+  bool lifted() const noexcept;
 
   // The loop's pacing: true once a servo record waits, false after the
   // stale time (the tick that follows then holds the feed: a stale fault).

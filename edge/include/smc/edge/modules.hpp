@@ -381,6 +381,10 @@ class ToolBreakageDetector final : public Module {
   void restart() noexcept;
   void close_window() noexcept;
   void judge(Signals& s, double change) noexcept;
+  void judge_pending(Signals& s) noexcept;
+  // The median of the last changes of the windows compared since the
+  // (re)start, leaving `exclude` out (-1: none); `count` gets how many.
+  double compared_median(int exclude, int& count) const noexcept;
   EdgeParameters p_;
   int stride_ = 0;                  // samples kept per window (the longest window)
   std::vector<double> cumulative_;  // per window: running sums of |F|, one revolution ago
@@ -413,10 +417,16 @@ class ToolBreakageDetector final : public Module {
   }
   int closed_ = 0;  // windows compared since the (re)start
   bool have_previous_[kMaxTeeth] = {};
-  int window_ = -1;       // the window being summed
-  bool partial_ = false;  // sampling started inside it: not compared
-  int count_ = 0;         // its samples so far
-  double last_t_s_ = -1;  // time of the last sample taken (a gap restarts the windows)
+  bool compared_[kMaxTeeth] = {};  // change_ is from a comparison since the (re)start
+  // A certain fall seen before two other windows were compared (the first
+  // compared revolution): decided once they are, against their median.
+  int pending_window_ = -1;
+  double pending_mean_ = 0;
+  static constexpr int kMinPeers = 2;  // other windows compared for a common change
+  int window_ = -1;                    // the window being summed
+  bool partial_ = false;               // sampling started inside it: not compared
+  int count_ = 0;                      // its samples so far
+  double last_t_s_ = -1;               // time of the last sample taken (a gap restarts the windows)
   double largest_score_ = 0;
 };
 

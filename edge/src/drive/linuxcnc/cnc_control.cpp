@@ -143,6 +143,21 @@ void CncControl::abort() {
   impl_->send(a, "abort");
 }
 
+void CncControl::mdi(const std::string& line) {
+  take_errors();  // only this command's messages
+  EMC_TASK_SET_MODE mode;
+  mode.mode = EMC_TASK_MODE_MDI;
+  impl_->send(mode, "MDI mode");
+  EMC_TASK_PLAN_EXECUTE m;
+  if (line.size() >= sizeof(m.command)) throw std::runtime_error(line + ": line too long");
+  std::strncpy(m.command, line.c_str(), sizeof(m.command) - 1);
+  // Waits for receipt only: the task stays "executing" while the move runs.
+  impl_->send(m, "run an MDI line", false);
+  std::string why;
+  for (const auto& e : take_errors()) why += (why.empty() ? "" : "; ") + e;
+  if (!why.empty()) throw std::runtime_error("MDI '" + line + "': LinuxCNC: " + why);
+}
+
 void CncControl::set_spindle_override(double scale) {
   EMC_TRAJ_SET_SPINDLE_SCALE m;
   m.spindle = 0;

@@ -48,6 +48,10 @@ class CncControl {
   void run();
   // Stops the program and any motion (EMC_TASK_ABORT).
   void abort();
+  // MDI mode, then runs one line of G-code; returns once LinuxCNC has
+  // taken it (the motion may still run: status() tells when it stopped).
+  // Throws with LinuxCNC's messages when it is refused.
+  void mdi(const std::string& line);
   // The spindle override: the programmed speed times `scale`
   // (EMC_TRAJ_SET_SPINDLE_SCALE, spindle 0). It stays until changed, also
   // across programs.

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -83,7 +84,11 @@ struct LinuxCncDrive::Impl {
   // generation.
   std::atomic<double> speed_scale{1.0};
   std::atomic<int> speed_asked{0};
+  // N's breakage: lift the tool clear (retract()).
+  std::atomic<bool> retract_asked{false};
   // Control thread → loop.
+  std::atomic<bool> retract_moving{false};  // the lift runs: the feed is released for it
+  std::atomic<bool> retract_done{false};
   std::atomic<int> rewrite_done{0};
   std::atomic<bool> done{false};
   std::atomic<int> fault{static_cast<int>(CncFault::kNone)};
@@ -151,6 +156,9 @@ struct LinuxCncDrive::Impl {
   }
 
   void control_loop();
+  // The control thread's part of retract(): standstill, abort, a rapid to
+  // the safe Z in MDI, and wait until the move stopped there.
+  void lift();
 };
 
 LinuxCncDrive::LinuxCncDrive(const smc::config::SupervisorConfig& config, double sample_period_s,
@@ -238,7 +246,10 @@ void LinuxCncDrive::Impl::control_loop() {
   int handled = 0;
   int speed_handled = 0;
   int idle_polls = 0;
-  while (!stop) {
+  // A lift asked for is finished even when the drive is being destroyed
+  // (the run ends a second after a breakage): the tool is not left in the
+  // part half-way up. Each LinuxCNC command is bounded by its timeout.
+  while (!stop || (retract_asked.load(std::memory_order_acquire) && !retract_done)) {
     std::this_thread::sleep_for(5ms);
     linuxcnc::CncStatus st;
     try {
@@ -255,7 +266,7 @@ void LinuxCncDrive::Impl::control_loop() {
       set_fault(CncFault::kEstop, "LinuxCNC went into E-stop during the job");
     else if (!st.on)
       set_fault(CncFault::kOff, "LinuxCNC's machine was switched off during the job");
-    else if (!st.auto_mode) {
+    else if (!st.auto_mode && !retract_asked.load(std::memory_order_acquire)) {
       set_fault(CncFault::kNotAuto,
                 "LinuxCNC left auto mode during the job (an operator or "
                 "another program took it to manual or MDI)");
@@ -265,6 +276,13 @@ void LinuxCncDrive::Impl::control_loop() {
         cnc->abort();
       } catch (const std::exception&) {
       }
+      return;
+    }
+    if (retract_asked.load(std::memory_order_acquire)) {
+      // A safe point: the feed is held by the loop; wait for standstill.
+      if (std::fabs(st.velocity_mm_s) > 1e-3) continue;
+      lift();
+      retract_done.store(true, std::memory_order_release);
       return;
     }
     const int speed = speed_asked.load(std::memory_order_acquire);
@@ -315,6 +333,40 @@ void LinuxCncDrive::Impl::control_loop() {
   }
 }
 
+void LinuxCncDrive::Impl::lift() {
+  using namespace std::chrono_literals;
+  const double safe_z = supervision::GcodeOptions{}.safe_z_mm;  // the programs' own
+  try {
+    cnc->abort();
+    retract_moving.store(true, std::memory_order_release);
+    char line[96];
+    std::snprintf(line, sizeof line, "G21 G90 G54 G0 Z%.3f", safe_z);
+    cnc->mdi(line);
+    // The move runs; it is done when the interpreter is idle and the axes
+    // stand still (at most 10 s: 60 mm at the slowest rapid configured).
+    const auto until = std::chrono::steady_clock::now() + 10s;
+    int still = 0;
+    while (std::chrono::steady_clock::now() < until) {
+      std::this_thread::sleep_for(5ms);
+      const linuxcnc::CncStatus now = cnc->status();
+      for (const auto& m : cnc->take_errors()) {
+        throw std::runtime_error("LinuxCNC: " + m);
+      }
+      still = now.interp_idle && std::fabs(now.velocity_mm_s) < 1e-3 ? still + 1 : 0;
+      if (still >= 3) {
+        spdlog::warn("{}: tool broken: LinuxCNC lifted it to Z{:.1f}", opt.machine_id, safe_z);
+        retract_moving.store(false, std::memory_order_release);
+        return;
+      }
+    }
+    throw std::runtime_error("the lift did not end within 10 s");
+  } catch (const std::exception& e) {
+    retract_moving.store(false, std::memory_order_release);
+    set_fault(CncFault::kProgram,
+              std::string("lifting the broken tool: ") + e.what() + "; clear the tool by hand");
+  }
+}
+
 bool LinuxCncDrive::wait_sample() noexcept {
   Impl& d = *impl_;
   if (!d.stream) return false;
@@ -345,8 +397,11 @@ Status LinuxCncDrive::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
     d.fault.store(static_cast<int>(CncFault::kStale));  // words in fault()
   }
   const bool faulted = d.fault.load(std::memory_order_acquire) != static_cast<int>(CncFault::kNone);
-  const bool rewriting = d.rewrite_asked.load(std::memory_order_relaxed) !=
-                         d.rewrite_done.load(std::memory_order_acquire);
+  // A lift (after a breakage) is also not a pass: LinuxCNC's program is
+  // aborted and the move is MDI.
+  const bool retracting = d.retract_asked.load(std::memory_order_relaxed);
+  const bool rewriting = retracting || d.rewrite_asked.load(std::memory_order_relaxed) !=
+                                           d.rewrite_done.load(std::memory_order_acquire);
   // Where LinuxCNC is in the program: the cutting line (G1) of a pass is the
   // pass; the moves between (rapid positioning in air) are not.
   const LineMap& map =
@@ -374,7 +429,9 @@ Status LinuxCncDrive::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   double f_max = d.geometry.max_feed_per_tooth_mm * d.geometry.teeth * spec.spindle_rpm / 60.0;
   if (d.geometry.max_feedrate_mm_s > 0) f_max = std::min(f_max, d.geometry.max_feedrate_mm_s);
   if (d.axis_max_mm_s > 0) f_max = std::min(f_max, d.axis_max_mm_s);
-  const bool hold = faulted || rewriting || (d.in_pass && !(feedrate_cmd_mm_s > 0));
+  // The lift's move alone runs with the feed released.
+  const bool lifting = d.retract_moving.load(std::memory_order_acquire);
+  const bool hold = !lifting && (faulted || rewriting || (d.in_pass && !(feedrate_cmd_mm_s > 0)));
   d.stream->set_feed_inhibit(hold);
   double share = d.in_pass && f_max > 0 ? feedrate_cmd_mm_s / f_max : 1.0;
   if (hold) share = 0;
@@ -423,6 +480,20 @@ Status LinuxCncDrive::rewrite(const FixedProgram& program, int from) noexcept {
   d.in_pass = false;
   d.rewrite_asked.fetch_add(1, std::memory_order_release);
   return Status::kOk;
+}
+
+Status LinuxCncDrive::retract() noexcept {
+  Impl& d = *impl_;
+  if (!d.stream) return Status::kError;
+  d.stream->set_feed_inhibit(true);
+  d.stream->set_adaptive_feed(0);
+  d.in_pass = false;
+  d.retract_asked.store(true, std::memory_order_release);
+  return Status::kOk;
+}
+
+bool LinuxCncDrive::lifted() const noexcept {
+  return impl_->retract_done.load(std::memory_order_acquire);
 }
 
 Status LinuxCncDrive::change_spindle_speed(double rpm) noexcept {

@@ -14,6 +14,10 @@
 // at load and at each rising edge of `new-part`. The material the cutter's
 // footprint sweeps stands at the tool's Z from then on, so the depth of cut
 // comes from where LinuxCNC actually put the tool, whatever the program.
+// A new part is mounted with the tool clear of it: until the tool has been
+// at or above the top face since `new-part` (a job stopped mid-cut leaves it
+// in the old part; the next program's first move lifts it), the tool cuts
+// nothing and leaves the blank whole.
 //
 //   loadrt smc_dyno config=FILE [plant=FILE] [seed=N]
 //     config  a smc.config.SupervisorConfig (text format): its milling_model
@@ -108,7 +112,8 @@ struct Dyno {
   double last_x = 0;
   bool have_x = false;
   bool last_new_part = false;
-  int broken_tooth = 0;  // the last tooth broken by the break-tooth pin
+  bool clear_of_part = true;  // the tool was above the top face since the blank was mounted
+  int broken_tooth = 0;       // the last tooth broken by the break-tooth pin
   long period_ns = 0;
 
   Dyno(mc::MillingModel m, const mc::SimulatorOptions& o) : model(std::move(m)), sim(model, o) {}
@@ -128,6 +133,7 @@ struct Dyno {
     lp_y.reset();
     lp_z.reset();
     have_x = false;
+    clear_of_part = false;
   }
 };
 
@@ -215,7 +221,10 @@ void update(void* /*arg*/, long period) {
   // The chip depth where the leading edge meets material.
   const double edge = std::min(d.length(), x + d.radius());
   const double tip = -z;  // below the top face
-  in.depth_mm = std::isfinite(tip) ? std::max(0.0, tip - d.removed_at(std::max(0.0, edge))) : 0;
+  if (!d.clear_of_part && std::isfinite(tip) && tip <= 0) d.clear_of_part = true;
+  in.depth_mm = std::isfinite(tip) && d.clear_of_part
+                    ? std::max(0.0, tip - d.removed_at(std::max(0.0, edge)))
+                    : 0;
   mc::Sample smp;
   status |= d.sim.step(in, smp, {d.trace_x.data(), d.trace_y.data(), d.trace_z.data()});
   double fx = 0, fy = 0, fz = 0;
@@ -232,7 +241,7 @@ void update(void* /*arg*/, long period) {
   // The cutter's footprint behind its leading edge now stands at the tool's
   // Z: every bin [i, i+1) x bin_mm wholly behind the leading edge (the bin
   // under the edge is where the next chip's depth is read).
-  if (std::isfinite(tip) && tip > 0 && std::isfinite(x)) {
+  if (d.clear_of_part && std::isfinite(tip) && tip > 0 && std::isfinite(x)) {
     const double lead = x + d.radius();
     auto i = static_cast<std::size_t>(std::max(0.0, x - d.radius()) / d.bin_mm);
     for (; i < d.removed.size() && static_cast<double>(i + 1) * d.bin_mm <= lead; ++i) {
