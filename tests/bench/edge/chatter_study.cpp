@@ -3,7 +3,7 @@
 //
 //   build/release/bin/smc-bench-chatter-detector [--seeds N] [--speeds 750,1100,...]
 //       [--widths 25,37,50] [--fractions 0.3,0.6,0.9,1.3,1.8] [--runouts 0,10,20]
-//       [--quick] [--verbose] [--dump FILE.csv]
+//       [--quick] [--verbose] [--dump FILE.csv] [--dump-samples STEM]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
@@ -19,7 +19,16 @@
 // every revolution E judged or skipped in contact (statistic, engagement,
 // feed) with its run's onset, to try other decision rules offline: what
 // happens before E's first detection does not depend on the rule (run with
-// --threshold 1 so that E never fires).
+// --threshold 1 so that E never fires). --dump-samples STEM writes every
+// run's samples and revolutions, to try other statistics offline:
+// STEM.runs.csv (one line per run: its grid point, onset and detection
+// times, and where its records start in the two binary files and how many
+// there are), STEM.samples.bin (21-byte records, little-endian: t_s f64,
+// F_z f32, feed rate f32, relative vibration y f32, flags u8 -- bit 0
+// contact, bit 1 E active, bit 2 in a pass) and STEM.revs.bin (17-byte
+// records: t_s f64, E's statistic f32, feed per tooth f32, flags u8 -- bit
+// 0 contact, bit 1 E active). A revolution's samples are those after the
+// revolution before, up to its own t_s.
 
 #include <algorithm>
 #include <cmath>
@@ -60,6 +69,10 @@ int main(int argc, char** argv) {
   double threshold_override = 0;
   int confirm_override = 0;
   std::FILE* dump = nullptr;
+  std::FILE* raw_runs = nullptr;
+  std::FILE* raw_samples = nullptr;
+  std::FILE* raw_revs = nullptr;
+  uint64_t raw_sample_at = 0, raw_rev_at = 0;
   for (int i = 1; i < argc; ++i) {
     if (grid.take(argc, argv, i)) continue;
     const bool more = i + 1 < argc;
@@ -67,6 +80,18 @@ int main(int argc, char** argv) {
       threshold_override = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
       confirm_override = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--dump-samples") == 0 && more) {
+      const std::string stem = argv[++i];
+      raw_runs = std::fopen((stem + ".runs.csv").c_str(), "w");
+      raw_samples = std::fopen((stem + ".samples.bin").c_str(), "wb");
+      raw_revs = std::fopen((stem + ".revs.bin").c_str(), "wb");
+      if (raw_runs == nullptr || raw_samples == nullptr || raw_revs == nullptr) {
+        std::perror((stem + ".{runs.csv,samples.bin,revs.bin}").c_str());
+        return 2;
+      }
+      std::fprintf(raw_runs,
+                   "run,rpm,width,runout,fraction,seed,onset_s,detected_s,sample_at,samples,rev_"
+                   "at,revs\n");
     } else if (std::strcmp(argv[i], "--dump") == 0 && more) {
       dump = std::fopen(argv[++i], "w");
       if (dump == nullptr) {
@@ -80,7 +105,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
                    "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose] "
-                   "[--dump FILE.csv]\n",
+                   "[--dump FILE.csv] [--dump-samples STEM]\n",
                    argv[0]);
       return 2;
     }
@@ -168,6 +193,38 @@ int main(int argc, char** argv) {
                              r.chatter_ratio, r.engagement_min, r.feed_per_tooth_mm);
               }
             }
+            if (raw_runs != nullptr) {
+              uint64_t ns = 0, nr = 0;
+              for (const auto& t : run.samples) {
+                const float v[3] = {static_cast<float>(t.f_z_n),
+                                    static_cast<float>(t.feedrate_mm_s),
+                                    static_cast<float>(t.vibration_y_mm)};
+                const uint8_t flags = (t.contact ? 1 : 0) |
+                                      ((t.active & bit(ModuleId::E)) ? 2 : 0) | (t.in_pass ? 4 : 0);
+                std::fwrite(&t.t_s, 8, 1, raw_samples);
+                std::fwrite(v, 4, 3, raw_samples);
+                std::fwrite(&flags, 1, 1, raw_samples);
+                ++ns;
+              }
+              for (const auto& r : run.revolutions) {
+                const float v[2] = {static_cast<float>(r.chatter_ratio),
+                                    static_cast<float>(r.feed_per_tooth_mm)};
+                const uint8_t flags = (r.contact ? 1 : 0) | ((r.active & bit(ModuleId::E)) ? 2 : 0);
+                std::fwrite(&r.t_s, 8, 1, raw_revs);
+                std::fwrite(v, 4, 2, raw_revs);
+                std::fwrite(&flags, 1, 1, raw_revs);
+                ++nr;
+              }
+              std::fprintf(raw_runs, "%d,%.0f,%.0f,%.0f,%.2f,%d,%.6f,%.6f,%llu,%llu,%llu,%llu\n",
+                           run_id, rpm, width, runout, fraction, seed, s.chatter_onset_s(),
+                           first_detection, static_cast<unsigned long long>(raw_sample_at),
+                           static_cast<unsigned long long>(ns),
+                           static_cast<unsigned long long>(raw_rev_at),
+                           static_cast<unsigned long long>(nr));
+              std::fflush(raw_runs);
+              raw_sample_at += ns;
+              raw_rev_at += nr;
+            }
             uint64_t revs = 0, exceed = 0;
             double max_ratio = 0;
             for (const auto& r : run.revolutions) {
@@ -244,5 +301,10 @@ int main(int argc, char** argv) {
   std::printf("goal (0 false detections, every unstable cut within 3 revolutions): %s\n",
               pass ? "met" : "NOT met");
   if (dump != nullptr) std::fclose(dump);
+  if (raw_runs != nullptr) {
+    std::fclose(raw_runs);
+    std::fclose(raw_samples);
+    std::fclose(raw_revs);
+  }
   return 0;
 }
