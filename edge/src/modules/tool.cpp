@@ -244,7 +244,7 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
   current_[static_cast<size_t>(count_)] =
       (count_ > 0 ? current_[static_cast<size_t>(count_ - 1)] : 0.0) + force;
   ++count_;
-  // From half a window on: this window's samples so far against the same
+  // From 1/kJudgeFrom of a window on: this window's samples so far against the same
   // samples of the window one revolution ago.
   const int j = window_;
   if (partial_ || !have_previous_[j] || kJudgeFrom * count_ < previous_count_[j] ||

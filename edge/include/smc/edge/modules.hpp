@@ -401,7 +401,7 @@ class ToolBreakageDetector final : public Module {
   static constexpr double kFloorShare = 0.75;   // judged above this x the contact threshold
   static constexpr double kFeedFall = 0.05;     // a suspect after the feed fell more than this
   static constexpr double kConfirmShare = 0.5;  // x threshold x mean window: the chip taken
-  static constexpr int kJudgeFrom = 3;          // judged from 1/kJudgeFrom of a window on
+  static constexpr int kJudgeFrom = 8;          // judged from 1/kJudgeFrom of a window on
   double feed_before_[kMaxTeeth] = {};          // feed command when each window last closed
   double feed_before2_[kMaxTeeth] = {};         // and the revolution before
   double feed_now_ = 0;
