@@ -151,10 +151,12 @@ TEST(Gcode, ARewritesRemainderStartsAtItsOwnZLevel) {
 
 TEST(Gcode, ThePlannedConfigurationRendersAsItsProgram) {
   const auto c = smc::documents::load_supervisor_config(src("edge/configs/smc1.textproto"));
-  const auto calls = interpret(sv::render_gcode(c));
+  std::string log;
+  const auto calls = interpret(sv::render_gcode(c), &log);
   int feeds = 0;
   for (const auto& cl : calls) feeds += cl.call == "STRAIGHT_FEED" ? 1 : 0;
-  EXPECT_EQ(feeds, c.program().passes_size());
+  // (It failed once under load with no feeds at all: rs274's own words then.)
+  EXPECT_EQ(feeds, c.program().passes_size()) << "rs274 -g printed:\n" << log;
 }
 
 // F never exceeds what the machine can feed: LinuxCNC would cap it at the
