@@ -80,10 +80,9 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   if (window_mean < kFloorShare * p_.contact_threshold_n) return;  // too little force to judge
   // The common change: the median of the windows' last changes (of those
   // compared since the (re)start: the others have none yet).
-  int peers = 0;  // the other windows compared since then
-  (void)compared_median(window_, peers);
   int compared = 0;
   const double median = compared_median(-1, compared);
+  const int peers = compared - (compared_[window_] ? 1 : 0);  // the others compared since then
   // A suspect (see below) is confirmed when another window has taken its
   // chip: risen beyond the common change by half the threshold's share of
   // the mean window (the lost chip shows concentrated in one window, the

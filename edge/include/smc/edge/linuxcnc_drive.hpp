@@ -76,11 +76,9 @@ class LinuxCncDrive final : public Drive {
   double sample_period_s() const noexcept override { return period_s_; }
   // After a breakage: the tool lifted to the safe Z by the control thread
   // (LinuxCNC's MDI). kOk when asked; the lift follows within about a
-  // second (lifted() says when it is done).
+  // second (a lift that fails is a fault: fault() names it).
   bool can_retract() const noexcept override { return true; }
   Status retract() noexcept override;
-  // The lift retract() asked for is done (or failed: fault() says why).
-  bool lifted() const noexcept;
 
   // The loop's pacing: true once a servo record waits, false after the
   // stale time (the tick that follows then holds the feed: a stale fault).

@@ -110,11 +110,21 @@ void CncControl::require_ready() {
   }
 }
 
+std::string CncControl::take_error_text() {
+  std::string why;
+  for (const auto& m : take_errors()) why += (why.empty() ? "" : "; ") + m;
+  return why;
+}
+
+void CncControl::set_mode(int mode, const char* what) {
+  EMC_TASK_SET_MODE m;
+  m.mode = static_cast<decltype(m.mode)>(mode);
+  impl_->send(m, what);
+}
+
 void CncControl::open_program(const std::string& path) {
   take_errors();  // only this program's messages
-  EMC_TASK_SET_MODE mode;
-  mode.mode = EMC_TASK_MODE_AUTO;
-  impl_->send(mode, "auto mode");
+  set_mode(EMC_TASK_MODE_AUTO, "auto mode");
   EMC_TASK_PLAN_CLOSE close;
   impl_->send(close, "close the open program");
   EMC_TASK_PLAN_OPEN open;
@@ -123,12 +133,10 @@ void CncControl::open_program(const std::string& path) {
   try {
     impl_->send(open, "open the program");
   } catch (const std::runtime_error& e) {
-    std::string why;
-    for (const auto& m : take_errors()) why += "; " + m;
-    throw std::runtime_error(path + ": " + e.what() + why);
+    const std::string why = take_error_text();
+    throw std::runtime_error(path + ": " + e.what() + (why.empty() ? "" : "; " + why));
   }
-  std::string why;
-  for (const auto& m : take_errors()) why += (why.empty() ? "" : "; ") + m;
+  const std::string why = take_error_text();
   if (!why.empty()) throw std::runtime_error(path + ": LinuxCNC: " + why);
 }
 
@@ -145,16 +153,13 @@ void CncControl::abort() {
 
 void CncControl::mdi(const std::string& line) {
   take_errors();  // only this command's messages
-  EMC_TASK_SET_MODE mode;
-  mode.mode = EMC_TASK_MODE_MDI;
-  impl_->send(mode, "MDI mode");
+  set_mode(EMC_TASK_MODE_MDI, "MDI mode");
   EMC_TASK_PLAN_EXECUTE m;
   if (line.size() >= sizeof(m.command)) throw std::runtime_error(line + ": line too long");
   std::strncpy(m.command, line.c_str(), sizeof(m.command) - 1);
   // Waits for receipt only: the task stays "executing" while the move runs.
   impl_->send(m, "run an MDI line", false);
-  std::string why;
-  for (const auto& e : take_errors()) why += (why.empty() ? "" : "; ") + e;
+  const std::string why = take_error_text();
   if (!why.empty()) throw std::runtime_error("MDI '" + line + "': LinuxCNC: " + why);
 }
 

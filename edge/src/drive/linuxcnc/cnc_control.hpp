@@ -60,6 +60,11 @@ class CncControl {
   std::vector<std::string> take_errors();
 
  private:
+  // take_errors() joined with "; " (empty: none).
+  std::string take_error_text();
+  // Switches the task's mode (EMC_TASK_MODE_*), waiting until it is done.
+  void set_mode(int mode, const char* what);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -88,7 +88,6 @@ struct LinuxCncDrive::Impl {
   std::atomic<bool> retract_asked{false};
   // Control thread → loop.
   std::atomic<bool> retract_moving{false};  // the lift runs: the feed is released for it
-  std::atomic<bool> retract_done{false};
   std::atomic<int> rewrite_done{0};
   std::atomic<bool> done{false};
   std::atomic<int> fault{static_cast<int>(CncFault::kNone)};
@@ -249,8 +248,17 @@ void LinuxCncDrive::Impl::control_loop() {
   // A lift asked for is finished even when the drive is being destroyed
   // (the run ends a second after a breakage): the tool is not left in the
   // part half-way up. Each LinuxCNC command is bounded by its timeout.
-  while (!stop || (retract_asked.load(std::memory_order_acquire) && !retract_done)) {
+  std::chrono::steady_clock::time_point stopping{};
+  while (!stop || retract_asked.load(std::memory_order_acquire)) {
     std::this_thread::sleep_for(5ms);
+    if (stop) {  // only a lift keeps the thread, and not for ever
+      const auto now = std::chrono::steady_clock::now();
+      if (stopping == std::chrono::steady_clock::time_point{}) stopping = now;
+      if (now - stopping > 10s) {
+        set_fault(CncFault::kProgram, "the broken tool's lift did not start within 10 s");
+        return;
+      }
+    }
     linuxcnc::CncStatus st;
     try {
       st = cnc->status();
@@ -281,8 +289,7 @@ void LinuxCncDrive::Impl::control_loop() {
     if (retract_asked.load(std::memory_order_acquire)) {
       // A safe point: the feed is held by the loop; wait for standstill.
       if (std::fabs(st.velocity_mm_s) > 1e-3) continue;
-      lift();
-      retract_done.store(true, std::memory_order_release);
+      lift();  // the thread's last act
       return;
     }
     const int speed = speed_asked.load(std::memory_order_acquire);
@@ -490,10 +497,6 @@ Status LinuxCncDrive::retract() noexcept {
   d.in_pass = false;
   d.retract_asked.store(true, std::memory_order_release);
   return Status::kOk;
-}
-
-bool LinuxCncDrive::lifted() const noexcept {
-  return impl_->retract_done.load(std::memory_order_acquire);
 }
 
 Status LinuxCncDrive::change_spindle_speed(double rpm) noexcept {

@@ -22,7 +22,6 @@ Status LinuxCncDrive::step(double, DriveSample&) noexcept { return Status::kErro
 Status LinuxCncDrive::rewrite(const FixedProgram&, int) noexcept { return Status::kError; }
 Status LinuxCncDrive::change_spindle_speed(double) noexcept { return Status::kError; }
 Status LinuxCncDrive::retract() noexcept { return Status::kError; }
-bool LinuxCncDrive::lifted() const noexcept { return false; }
 bool LinuxCncDrive::wait_sample() noexcept { return false; }
 std::string LinuxCncDrive::fault() const { return "built without LinuxCNC"; }
 std::uint64_t LinuxCncDrive::lost_samples() const noexcept { return 0; }
