@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "smc/edge/modules.hpp"
 
@@ -43,6 +44,13 @@ void ToolBreakageDetector::configure(const EdgeParameters& p) {
   p_ = p;
   // A window is a tooth period: at most the longest revolution's share.
   stride_ = std::max(p.max_samples_per_revolution, p.samples_per_revolution) / p.teeth + 2;
+  // The windows a tooth's arc in the part spans (the next tooth's gain lies
+  // within them of the broken tooth's loss); unknown arc: any window.
+  const double window_rad = 2.0 * std::numbers::pi / p.teeth;
+  reach_ =
+      p.cut_arc_rad > 0
+          ? std::clamp(static_cast<int>(std::ceil(p.cut_arc_rad / window_rad - 1e-9)), 1, p.teeth)
+          : p.teeth;
   cumulative_.assign(static_cast<size_t>(stride_ * p.teeth), 0.0);
   current_.assign(static_cast<size_t>(stride_), 0.0);
   reset();
@@ -69,6 +77,13 @@ void ToolBreakageDetector::reset() noexcept {
   largest_score_ = 0;
 }
 
+bool ToolBreakageDetector::adjacent(int a, int b) const noexcept {
+  if (a == b) return false;
+  const int n = p_.teeth;
+  const int d = (a - b + n) % n;
+  return std::min(d, n - d) <= reach_;
+}
+
 void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   const int n = p_.teeth;
   // Settling: the windows have been compared for fewer than
@@ -88,7 +103,7 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   // the mean window (the lost chip shows concentrated in one window, the
   // taken one spread over a window or two: their sizes are not compared).
   const double taken = kConfirmShare * p_.breakage_threshold * window_mean;
-  if (suspect_window_ >= 0 && window_ != suspect_window_ && change >= 0.5 * taken &&
+  if (suspect_window_ >= 0 && adjacent(window_, suspect_window_) && change >= 0.5 * taken &&
       change - median >= taken && !s.tool_broken) {
     s.tool_broken = true;
     s.breakage_window = suspect_window_;
@@ -150,7 +165,7 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
       // window closed already, this revolution or the one before): then
       // the suspect is confirmed at once.
       for (int k = 0; k < n; ++k) {
-        if (k == window_) continue;
+        if (!adjacent(k, window_)) continue;
         // Risen: beyond the common change, and by half as much in itself (in
         // a fast common fall a window that falls less is no tooth taking a
         // chip).

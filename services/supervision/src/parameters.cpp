@@ -217,6 +217,16 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   p.model_beta = fm.beta();
   p.model_alpha = fm.alpha();
 
+  if (cfg.has_milling_model() && p.cutter_radius_mm > 0) {
+    const auto& w = cfg.milling_model().workpiece();
+    const double r = p.cutter_radius_mm;
+    const double lo = std::clamp((w.offset_mm() - w.width_mm() / 2) / r, -1.0, 1.0);
+    const double hi = std::clamp((w.offset_mm() + w.width_mm() / 2) / r, -1.0, 1.0);
+    if (w.width_mm() > 0 && std::isfinite(lo) && std::isfinite(hi) && hi > lo) {
+      p.cut_arc_rad = std::asin(hi) - std::asin(lo);
+    }
+  }
+
   if (!sample_ok) return p;  // the derived counts need a sample period
   // A count of sample periods, refused past kMaxCount (a day at 2 kHz: no
   // period of the edge is near it, and an int must hold it).

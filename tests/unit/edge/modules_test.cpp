@@ -613,6 +613,43 @@ TEST(ToolBreakageDetector, AfterAFallingFeedAFallMustBeTakenUpByAnotherTooth) {
   EXPECT_EQ(cut.s.breakage_window, 1);
 }
 
+// The tooth that takes a broken tooth's chip cuts it a window on, within the
+// windows the cut's arc spans. In a narrow cut (an arc under one window) a
+// window two away that rose as the chip moved between teeth under runout
+// (seen at a part's exit with 20 um of runout: the study's one false
+// detection) does not confirm a suspect; the window next to it does.
+TEST(ToolBreakageDetector, OnlyAWindowWithinTheCutsArcConfirmsASuspect) {
+  auto narrow = [](ToothCut& cut) {
+    cut.p.cut_arc_rad = std::numbers::pi / 3;  // 60 degrees: within one window of 4
+    cut.n.configure(cut.p);
+    cut.n.reset();
+  };
+  {
+    ToothCut cut;
+    narrow(cut);
+    cut.runout_then_falling_feed();
+    cut.s.feed_per_tooth_cmd_mm = 0.05;
+    const double falling2[4] = {370, 280, 140, 220};
+    EXPECT_EQ(cut.revolution(falling2), -1);
+    cut.s.feed_per_tooth_cmd_mm = 0.045;
+    const double far[4] = {360, 60, 140, 440};  // window 3 rose: two away from window 1
+    EXPECT_EQ(cut.revolution(far), -1) << "not within the arc's reach";
+    EXPECT_FALSE(cut.s.tool_broken);
+  }
+  {
+    ToothCut cut;
+    narrow(cut);
+    cut.runout_then_falling_feed();
+    cut.s.feed_per_tooth_cmd_mm = 0.05;
+    const double falling2[4] = {370, 280, 140, 220};
+    EXPECT_EQ(cut.revolution(falling2), -1);
+    cut.s.feed_per_tooth_cmd_mm = 0.045;
+    const double next[4] = {360, 60, 380, 220};  // window 2, next to window 1, rose
+    EXPECT_GE(cut.revolution(next), 0) << "the neighbour took the chip";
+    EXPECT_EQ(cut.s.breakage_window, 1);
+  }
+}
+
 // In the first compared revolutions (the controller's entry transient) and
 // while the feed falls, a fall needs another window to take the chip up --
 // unless it is certain: more than 0.9 of a mean window, alone. A tooth that

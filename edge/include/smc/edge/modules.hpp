@@ -382,6 +382,12 @@ class ToolBreakageDetector final : public Module {
   void close_window() noexcept;
   void judge(Signals& s, double change) noexcept;
   void judge_pending(Signals& s) noexcept;
+  // Window a can hold the chip a broken tooth in window b left: another
+  // window within reach_ of it, either way round (the next tooth cuts it a
+  // window later, and its arc spans reach_ windows; the spindle may turn
+  // with or against the teeth's numbering).
+  bool adjacent(int a, int b) const noexcept;
+  int reach_ = 1;
   // The median of the last changes of the windows compared since the
   // (re)start, leaving `exclude` out (-1: none); `count` gets how many.
   double compared_median(int exclude, int& count) const noexcept;

@@ -93,6 +93,11 @@ struct Parameters {
   double model_k_kn = 0;
   double model_beta = 0;
   double model_alpha = 0;
+  // The cutter's arc over the part's width (milling_model.workpiece: width
+  // and offset against cutter_radius_mm), radians; 0: not known. Module N
+  // looks for the tooth that took a broken tooth's chip within as many
+  // windows as this arc spans.
+  double cut_arc_rad = 0;
 
   // Derived, in samples.
   int samples_per_fast = 0;
