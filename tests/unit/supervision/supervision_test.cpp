@@ -13,6 +13,7 @@
 #include "smc/documents/load.hpp"
 #include "smc/supervision/config.hpp"
 #include "smc/supervision/grafcet_binding.hpp"
+#include "smc/supervision/parameters.hpp"
 #include "smc_config.pb.h"
 
 namespace sv = smc::supervision;
@@ -54,6 +55,23 @@ TEST(Conversions, ForceReferenceIsPowerOverCuttingSpeed) {
   EXPECT_NEAR(sv::feedrate_mm_s(0.1, 4, 1500), 10, 1e-12);
   EXPECT_NEAR(sv::feed_per_tooth_mm(10, 4, 1500), 0.1, 1e-12);
   EXPECT_EQ(sv::feed_per_tooth_mm(10, 4, 0), 0);
+}
+
+// The cutter's arc over the part (module N's reach when it confirms a
+// suspect): the paper's 48 mm part centred under a 25 mm radius is
+// 2 asin(24/25); a part wider than the cutter is the half circle; a part
+// off to one side, the arc over it alone; no width, unknown (0).
+TEST(Parameters, TheCuttersArcOverThePartComesFromTheWorkpiece) {
+  auto cfg = shipped("smc2.textproto");
+  EXPECT_NEAR(sv::parameters_from_config(cfg).cut_arc_rad, 2 * std::asin(24.0 / 25), 1e-12);
+  auto* w = cfg.mutable_milling_model()->mutable_workpiece();
+  w->set_width_mm(80);
+  EXPECT_NEAR(sv::parameters_from_config(cfg).cut_arc_rad, std::numbers::pi, 1e-12);
+  w->set_width_mm(10);
+  w->set_offset_mm(20);  // from 15 to 25 mm off the axis
+  EXPECT_NEAR(sv::parameters_from_config(cfg).cut_arc_rad, std::asin(1.0) - std::asin(0.6), 1e-12);
+  cfg.mutable_milling_model()->clear_workpiece();
+  EXPECT_EQ(sv::parameters_from_config(cfg).cut_arc_rad, 0.0);
 }
 
 TEST(Validate, ShippedConfigurationsAreValidAndCarryTheirBoundGrafcet) {
