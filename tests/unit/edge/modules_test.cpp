@@ -619,31 +619,28 @@ TEST(ToolBreakageDetector, AfterAFallingFeedAFallMustBeTakenUpByAnotherTooth) {
 // (seen at a part's exit with 20 um of runout: the study's one false
 // detection) does not confirm a suspect; the window next to it does.
 TEST(ToolBreakageDetector, OnlyAWindowWithinTheCutsArcConfirmsASuspect) {
-  auto narrow = [](ToothCut& cut) {
+  // A narrow cut, runout, a falling feed, then a revolution in which window 1
+  // falls (a suspect: the feed fell) and one window rises.
+  auto suspect_in_a_narrow_cut = [](ToothCut& cut) {
     cut.p.cut_arc_rad = std::numbers::pi / 3;  // 60 degrees: within one window of 4
     cut.n.configure(cut.p);
     cut.n.reset();
-  };
-  {
-    ToothCut cut;
-    narrow(cut);
     cut.runout_then_falling_feed();
     cut.s.feed_per_tooth_cmd_mm = 0.05;
     const double falling2[4] = {370, 280, 140, 220};
     EXPECT_EQ(cut.revolution(falling2), -1);
     cut.s.feed_per_tooth_cmd_mm = 0.045;
+  };
+  {
+    ToothCut cut;
+    suspect_in_a_narrow_cut(cut);
     const double far[4] = {360, 60, 140, 440};  // window 3 rose: two away from window 1
     EXPECT_EQ(cut.revolution(far), -1) << "not within the arc's reach";
     EXPECT_FALSE(cut.s.tool_broken);
   }
   {
     ToothCut cut;
-    narrow(cut);
-    cut.runout_then_falling_feed();
-    cut.s.feed_per_tooth_cmd_mm = 0.05;
-    const double falling2[4] = {370, 280, 140, 220};
-    EXPECT_EQ(cut.revolution(falling2), -1);
-    cut.s.feed_per_tooth_cmd_mm = 0.045;
+    suspect_in_a_narrow_cut(cut);
     const double next[4] = {360, 60, 380, 220};  // window 2, next to window 1, rose
     EXPECT_GE(cut.revolution(next), 0) << "the neighbour took the chip";
     EXPECT_EQ(cut.s.breakage_window, 1);
