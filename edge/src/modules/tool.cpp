@@ -63,12 +63,13 @@ void ToolBreakageDetector::restart() noexcept {
   std::fill(std::begin(change_), std::end(change_), 0.0);
   std::fill(std::begin(excess_), std::end(excess_), 0.0);
   std::fill(std::begin(excess_before_), std::end(excess_before_), 0.0);
+  std::fill(std::begin(common_before_), std::end(common_before_), 0.0);
   std::fill(std::begin(change_before_), std::end(change_before_), 0.0);
   window_ = -1;
   count_ = 0;
   closed_ = 0;
   most_engaged_ = 0;
-  clear_suspect();
+  std::fill(std::begin(suspect_drop_), std::end(suspect_drop_), 0.0);
 }
 
 void ToolBreakageDetector::reset() noexcept {
@@ -103,12 +104,19 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   // the mean window (the lost chip shows concentrated in one window, the
   // taken one spread over a window or two: their sizes are not compared).
   const double taken = kConfirmShare * p_.breakage_threshold * window_mean;
-  if (suspect_window_ >= 0 && adjacent(window_, suspect_window_) && change >= 0.5 * taken &&
-      change - median >= taken && !s.tool_broken) {
-    s.tool_broken = true;
-    s.breakage_window = suspect_window_;
-    s.breakage_drop = suspect_drop_;
-    return;
+  if (change >= 0.5 * taken && change - median >= taken && !s.tool_broken) {
+    int confirmed = -1;
+    for (int k = 0; k < n; ++k) {
+      if (suspect_drop_[k] > 0 && adjacent(window_, k) &&
+          (confirmed < 0 || suspect_drop_[k] > suspect_drop_[confirmed]))
+        confirmed = k;
+    }
+    if (confirmed >= 0) {
+      s.tool_broken = true;
+      s.breakage_window = confirmed;
+      s.breakage_drop = suspect_drop_[confirmed];
+      return;
+    }
   }
   // The other windows' spread about the common change: chatter moves every
   // window a lot, a break one window.
@@ -124,7 +132,11 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   const int before = (window_ + n - 1) % n;
   const double common = compared_[before] ? std::min(median, change_[before]) : median;
   const double excess = common - change;
-  const double trend = std::max(0.0, excess_[window_]);
+  // The trend shrinks with the common fall: a cutter leaving the part falls
+  // fastest at first.
+  const double was = common_before_[window_];
+  const double trend =
+      std::max(0.0, excess_[window_]) * (was < 0 ? std::clamp(common / was, 0.0, 1.0) : 1.0);
   const double drop = (excess - trend) / window_mean;
   if (excess - trend < kSpreadFactor * spread) return;
   if (s.tool_broken) return;
@@ -156,11 +168,9 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   // feed only after it, so the revolution before it was steady. Holds do not
   // reach N: it is active only in the cutting step.
   if (!certain && (feed_before_[window_] < (1.0 - kFeedFall) * feed_before2_[window_] || leaving)) {
-    if (drop > p_.breakage_threshold && (suspect_window_ < 0 || suspect_window_ == window_)) {
-      if (suspect_window_ < 0) suspect_closed_ = closed_;
-      suspect_window_ = window_;
-      suspect_excess_ = std::max(suspect_excess_, excess - trend);
-      suspect_drop_ = std::max(suspect_drop_, drop);
+    if (drop > p_.breakage_threshold && kSuspectFrom * count_ >= previous_count_[window_]) {
+      if (suspect_drop_[window_] <= 0) suspect_closed_[window_] = closed_;
+      suspect_drop_[window_] = std::max(suspect_drop_[window_], drop);
       // The tooth that took the chip may come first in the revolution (its
       // window closed already, this revolution or the one before): then
       // the suspect is confirmed at once.
@@ -173,8 +183,8 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
                                      change_before_[k] >= 0.5 * taken ? -excess_before_[k] : 0.0);
         if (rose >= taken) {
           s.tool_broken = true;
-          s.breakage_window = suspect_window_;
-          s.breakage_drop = suspect_drop_;
+          s.breakage_window = window_;
+          s.breakage_drop = suspect_drop_[window_];
           return;
         }
       }
@@ -223,8 +233,11 @@ void ToolBreakageDetector::close_window() noexcept {
   int compared = 0;
   const double median = compared_median(-1, compared);
   excess_[j] = have_previous_[j] ? median - change_[j] : 0.0;
+  common_before_[j] = have_previous_[j] ? median : 0.0;
   // A suspect no window confirmed within a revolution: not a break.
-  if (suspect_window_ >= 0 && closed_ - suspect_closed_ > p_.teeth) clear_suspect();
+  for (int k = 0; k < p_.teeth; ++k) {
+    if (suspect_drop_[k] > 0 && closed_ - suspect_closed_[k] > p_.teeth) suspect_drop_[k] = 0;
+  }
   previous_[j] = mean;
   feed_before2_[j] = feed_before_[j];
   feed_before_[j] = feed_now_;

@@ -647,6 +647,47 @@ TEST(ToolBreakageDetector, OnlyAWindowWithinTheCutsArcConfirmsASuspect) {
   }
 }
 
+// A window that fell without a taker (a chip lost to the falling feed, or
+// the part's end passing under the cutter) stays a suspect for a revolution.
+// A fall in another window within that revolution is a suspect of its own,
+// confirmed by its own taker (seen at a full slot's exit, where the part's
+// end made one window a suspect just before a tooth broke).
+TEST(ToolBreakageDetector, AnUnconfirmedSuspectDoesNotHideABreakAfterIt) {
+  ToothCut cut;
+  cut.p.cut_arc_rad = std::numbers::pi / 3;  // a taker within one window
+  cut.n.configure(cut.p);
+  cut.n.reset();
+  cut.runout_then_falling_feed();  // windows at {400, 310, 160, 250}
+  // Window 0 falls 100 N beyond the common 20 N with nothing taking it up
+  // (a suspect); window 3 then loses its chip.
+  const double suspect_then_lost[4] = {280, 290, 140, 30};
+  EXPECT_EQ(cut.revolution(suspect_then_lost), -1) << "two suspects, no taker yet";
+  // Window 0, next to window 3, takes its chip.
+  const double taken[4] = {430, 290, 140, 30};
+  EXPECT_GE(cut.revolution(taken), 0) << "window 0 took window 3's chip";
+  EXPECT_EQ(cut.s.breakage_window, 3);
+}
+
+// The fall of a window beyond the common change the revolution before is a
+// trend (one side of the cutter leaves the part first) and is taken off its
+// next fall. A part's end passing under the cutter makes every window fall
+// fastest at first: with the common fall ten times smaller a revolution on,
+// last revolution's excess is no measure of this one's, and a break then
+// would be hidden behind it. The trend shrinks with the common fall.
+TEST(ToolBreakageDetector, ATrendShrinksWithTheCommonFall) {
+  ToothCut cut;
+  const double intact[4] = {300, 300, 300, 300};
+  for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
+  // The windows fall 30 to 120 N: window 3 falls 45 N beyond the common
+  // (median) change of 75 N.
+  const double fast[4] = {270, 240, 210, 180};
+  ASSERT_EQ(cut.revolution(fast), -1);
+  // A revolution on the common fall is 10 N; window 3 falls 110 N.
+  const double broken[4] = {260, 230, 200, 70};
+  EXPECT_GE(cut.revolution(broken), 0) << "a 100 N fall beyond a 10 N common one";
+  EXPECT_EQ(cut.s.breakage_window, 3);
+}
+
 // In the first compared revolutions (the controller's entry transient) and
 // while the feed falls, a fall needs another window to take the chip up --
 // unless it is certain: more than 0.9 of a mean window, alone. A tooth that

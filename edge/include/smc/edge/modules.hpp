@@ -328,7 +328,7 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // N: tool-breakage detector (beyond Table 1; edge/README.md has the method
 // and the study). Splits each revolution of the core's revolution clock into
 // one window per tooth and follows the resultant force |F| in each, sample
-// by sample from a third of the window on, against the same samples one
+// by sample from an eighth of the window on, against the same samples one
 // revolution earlier (after Tlusty and Tarng's differences across teeth and
 // revolutions). A window falling beyond the windows' common change by more
 // than `breakage_threshold` x the mean window force, and by twice the other
@@ -336,14 +336,16 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // chip. The common change is the smaller of the median of the windows' last
 // changes and the last closed window's (entry, exit, depth and feed changes
 // move every window; runout repeats and cancels); a window's own fall the
-// revolution before is taken off (a trend). No decision in the first three
-// compared revolutions, nor below 0.75 x the contact threshold. After the
+// revolution before is taken off (a trend), shrunk as the common fall
+// shrank since. No decision in the first three compared revolutions but a
+// certain one, nor below 0.75 x the contact threshold. After the
 // feed fell by more than 5 % over a revolution, or once the drive's
 // engagement is below the most it reported (the cutter leaving the part), a
-// fall is only a suspect: confirmed when another window has
-// taken the chip (risen by half the threshold's share of the mean window,
-// beyond the common change and by half that in itself) within a revolution
-// before or after it. f is latched until N is reset.
+// fall (from a quarter of its window on) is only a suspect, one per window:
+// confirmed when another window within the cut's arc has taken the chip
+// (risen by half the threshold's share of the mean window, beyond the
+// common change and by half that in itself) within a revolution before or
+// after it. f is latched until N is reset.
 class ToolBreakageDetector final : public Module {
  public:
   ToolBreakageDetector() noexcept : Module(ModuleId::N) {}
@@ -399,6 +401,7 @@ class ToolBreakageDetector final : public Module {
   double previous_[kMaxTeeth] = {};             // window means, one revolution ago
   double change_[kMaxTeeth] = {};               // each window's last change of mean
   double excess_[kMaxTeeth] = {};               // and its fall beyond the common change then
+  double common_before_[kMaxTeeth] = {};        // the common change at its last close
   double excess_before_[kMaxTeeth] = {};        // the same, the revolution before
   double change_before_[kMaxTeeth] = {};        // each window's change the revolution before
   static constexpr double kSpreadFactor = 2.0;  // a break's fall x the others' spread
@@ -408,19 +411,15 @@ class ToolBreakageDetector final : public Module {
   static constexpr double kFeedFall = 0.05;     // a suspect after the feed fell more than this
   static constexpr double kConfirmShare = 0.5;  // x threshold x mean window: the chip taken
   static constexpr int kJudgeFrom = 8;          // judged from 1/kJudgeFrom of a window on
+  static constexpr int kSuspectFrom = 4;        // a suspect from 1/kSuspectFrom of a window on
   double feed_before_[kMaxTeeth] = {};          // feed command when each window last closed
   double feed_before2_[kMaxTeeth] = {};         // and the revolution before
   double feed_now_ = 0;
   double most_engaged_ = 0;  // the most engagement the drive reported since the (re)start
-  int suspect_window_ = -1;  // a fall after a falling feed, awaiting another window's rise
-  int suspect_closed_ = 0;   // closed_ when it was seen
-  double suspect_excess_ = 0;
-  double suspect_drop_ = 0;
-  void clear_suspect() noexcept {
-    suspect_window_ = -1;
-    suspect_excess_ = 0;
-    suspect_drop_ = 0;
-  }
+  // Suspects: falls after a falling feed or while leaving the part, each
+  // awaiting another window's rise (0: none), and closed_ when first seen.
+  double suspect_drop_[kMaxTeeth] = {};
+  int suspect_closed_[kMaxTeeth] = {};
   int closed_ = 0;  // windows compared since the (re)start
   bool have_previous_[kMaxTeeth] = {};
   bool compared_[kMaxTeeth] = {};  // change_ is from a comparison since the (re)start
