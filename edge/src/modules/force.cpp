@@ -24,10 +24,15 @@ Status ForceSignalProcessor::update(Signals& s) noexcept {
 }
 
 Status ContactMonitor::update(Signals& s) noexcept {
-  // Contact is found on any revolution, lost only on one cut at a feed
-  // throughout (after a hold in the part the force builds up again).
-  const bool above = s.f_y_peak_n > threshold_;
-  if (above || !held_) s.contact = above;
+  // Contact is found on any revolution with F_Y above the threshold, lost
+  // only on one cut at a feed throughout (after a hold in the part the force
+  // builds up again) with F_Y below kRelease x the threshold: a cut whose
+  // F_Y lies near the threshold keeps its contact.
+  if (s.f_y_peak_n > threshold_) {
+    s.contact = true;
+  } else if (!held_ && s.f_y_peak_n < kRelease * threshold_) {
+    s.contact = false;
+  }
   held_ = false;
   return Status::kOk;
 }

@@ -132,15 +132,16 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   const int before = (window_ + n - 1) % n;
   const double common = compared_[before] ? std::min(median, change_[before]) : median;
   const double excess = common - change;
-  // The trend shrinks with the common fall: a cutter leaving the part falls
-  // fastest at first.
+  // Leaving the part (engagement below the most the drive reported since
+  // the (re)start; NaN: unknown), the trend shrinks with the common fall:
+  // the part's end passing under the cutter makes it fall fastest at first.
+  const bool leaving = s.engagement < most_engaged_ - 1e-9;
   const double was = common_before_[window_];
-  const double trend =
-      std::max(0.0, excess_[window_]) * (was < 0 ? std::clamp(common / was, 0.0, 1.0) : 1.0);
+  const double trend = std::max(0.0, excess_[window_]) *
+                       (leaving && was < 0 ? std::clamp(common / was, 0.0, 1.0) : 1.0);
   const double drop = (excess - trend) / window_mean;
   if (excess - trend < kSpreadFactor * spread) return;
   if (s.tool_broken) return;
-  const bool leaving = s.engagement < most_engaged_ - 1e-9;
   // A certain fall: more than kCertainDrop of a mean window, alone, not
   // leaving the part. Only such a fall decides while settling, and it is a
   // break however the feed moved: a tooth that breaks then is compared with

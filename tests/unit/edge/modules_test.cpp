@@ -492,6 +492,32 @@ TEST(ContactMonitor, LosesContactOnlyOnARevolutionAtFeed) {
   EXPECT_FALSE(revolution(10, 20));
 }
 
+// Contact is found above the threshold (50 N) and lost below 0.75 of it: a
+// cut whose F_Y hovers about the threshold (a shallow cut at 3000 rpm, where
+// the force controller lowers the feed on contact and F_Y falls under the
+// threshold) keeps its contact instead of flickering in and out of the
+// cutting step, where N and the force control act.
+TEST(ContactMonitor, ContactIsReleasedBelowThreeQuartersOfTheThreshold) {
+  ContactMonitor j;
+  j.configure(params());
+  j.reset();
+  Signals s;
+  s.in_pass = true;
+  s.feedrate_cmd_mm_s = 10;
+  auto revolution = [&](double f_y) {
+    for (int k = 0; k < 10; ++k) j.on_sample(s);
+    s.f_y_peak_n = f_y;
+    EXPECT_EQ(j.update(s), Status::kOk);
+    return s.contact;
+  };
+  EXPECT_FALSE(revolution(45)) << "below the threshold: no contact yet";
+  EXPECT_TRUE(revolution(55));
+  EXPECT_TRUE(revolution(45)) << "between 0.75 and 1 x the threshold: kept";
+  EXPECT_TRUE(revolution(38));
+  EXPECT_FALSE(revolution(37)) << "below 0.75 x the threshold: released";
+  EXPECT_FALSE(revolution(45)) << "found again only above the threshold";
+}
+
 // ------------------------------------------------- modules beyond Table 1
 
 namespace {
@@ -673,18 +699,25 @@ TEST(ToolBreakageDetector, AnUnconfirmedSuspectDoesNotHideABreakAfterIt) {
 // next fall. A part's end passing under the cutter makes every window fall
 // fastest at first: with the common fall ten times smaller a revolution on,
 // last revolution's excess is no measure of this one's, and a break then
-// would be hidden behind it. The trend shrinks with the common fall.
-TEST(ToolBreakageDetector, ATrendShrinksWithTheCommonFall) {
+// would be hidden behind it. Leaving the part, the trend shrinks with the
+// common fall.
+TEST(ToolBreakageDetector, LeavingThePartATrendShrinksWithTheCommonFall) {
   ToothCut cut;
+  cut.s.engagement = 1.0;
   const double intact[4] = {300, 300, 300, 300};
   for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
-  // The windows fall 30 to 120 N: window 3 falls 45 N beyond the common
-  // (median) change of 75 N.
+  // The part's end: the windows fall 30 to 120 N; window 3 falls 45 N
+  // beyond the common (median) change of 75 N.
+  cut.s.engagement = 0.8;
   const double fast[4] = {270, 240, 210, 180};
   ASSERT_EQ(cut.revolution(fast), -1);
-  // A revolution on the common fall is 10 N; window 3 falls 110 N.
+  // A revolution on the common fall is 10 N; window 3 falls 110 N (a
+  // suspect: leaving the part), and window 0 takes its chip.
+  cut.s.engagement = 0.7;
   const double broken[4] = {260, 230, 200, 70};
-  EXPECT_GE(cut.revolution(broken), 0) << "a 100 N fall beyond a 10 N common one";
+  EXPECT_EQ(cut.revolution(broken), -1) << "a suspect, no taker yet";
+  const double taken[4] = {330, 220, 190, 60};
+  EXPECT_GE(cut.revolution(taken), 0) << "a 100 N fall beyond a 10 N common one, taken up";
   EXPECT_EQ(cut.s.breakage_window, 3);
 }
 

@@ -171,7 +171,8 @@ class ForceSignalProcessor final : public Module {
   double peak_ = 0;
 };
 
-// J: contact when F_Y exceeds the threshold (50 N).
+// J: contact when F_Y exceeds the threshold (50 N), until a revolution cut
+// at a feed throughout has F_Y below kRelease x the threshold.
 class ContactMonitor final : public Module {
  public:
   ContactMonitor() noexcept : Module(ModuleId::J) {}
@@ -192,6 +193,7 @@ class ContactMonitor final : public Module {
   Status update(Signals& s) noexcept override;
 
  private:
+  static constexpr double kRelease = 0.75;  // x threshold: contact released below
   double threshold_ = 0;
   bool held_ = true;  // the first revolution after activation is partial
 };
@@ -336,8 +338,8 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // chip. The common change is the smaller of the median of the windows' last
 // changes and the last closed window's (entry, exit, depth and feed changes
 // move every window; runout repeats and cancels); a window's own fall the
-// revolution before is taken off (a trend), shrunk as the common fall
-// shrank since. No decision in the first three compared revolutions but a
+// revolution before is taken off (a trend), leaving the part shrunk as
+// the common fall shrank since. No decision in the first three compared revolutions but a
 // certain one, nor below 0.75 x the contact threshold. After the
 // feed fell by more than 5 % over a revolution, or once the drive's
 // engagement is below the most it reported (the cutter leaving the part), a
