@@ -554,6 +554,13 @@ struct ToothCut {
     }
     return -1;
   }
+  // A narrow cut: an arc of 60 degrees, within one window of 4 (the taker of
+  // a lost chip is a neighbouring window).
+  void narrow_cut() {
+    p.cut_arc_rad = std::numbers::pi / 3;
+    n.configure(p);
+    n.reset();
+  }
   // Runout (unequal windows) for 6 revolutions, then a revolution in which
   // the feed falls (0.1 to 0.08 mm/tooth) and every window with it; the
   // feed goes on falling (0.06) into the next revolution.
@@ -648,9 +655,7 @@ TEST(ToolBreakageDetector, OnlyAWindowWithinTheCutsArcConfirmsASuspect) {
   // A narrow cut, runout, a falling feed, then a revolution in which window 1
   // falls (a suspect: the feed fell) and one window rises.
   auto suspect_in_a_narrow_cut = [](ToothCut& cut) {
-    cut.p.cut_arc_rad = std::numbers::pi / 3;  // 60 degrees: within one window of 4
-    cut.n.configure(cut.p);
-    cut.n.reset();
+    cut.narrow_cut();
     cut.runout_then_falling_feed();
     cut.s.feed_per_tooth_cmd_mm = 0.05;
     const double falling2[4] = {370, 280, 140, 220};
@@ -680,9 +685,7 @@ TEST(ToolBreakageDetector, OnlyAWindowWithinTheCutsArcConfirmsASuspect) {
 // end made one window a suspect just before a tooth broke).
 TEST(ToolBreakageDetector, AnUnconfirmedSuspectDoesNotHideABreakAfterIt) {
   ToothCut cut;
-  cut.p.cut_arc_rad = std::numbers::pi / 3;  // a taker within one window
-  cut.n.configure(cut.p);
-  cut.n.reset();
+  cut.narrow_cut();
   cut.runout_then_falling_feed();  // windows at {400, 310, 160, 250}
   // Window 0 falls 100 N beyond the common 20 N with nothing taking it up
   // (a suspect); window 3 then loses its chip.
