@@ -561,6 +561,11 @@ struct ToothCut {
     }
     return -1;
   }
+  // A steady cut: every window at 300 N for 6 revolutions, nothing seen.
+  void steady() {
+    const double level[4] = {300, 300, 300, 300};
+    for (int r = 0; r < 6; ++r) ASSERT_EQ(revolution(level), -1);
+  }
   // A narrow cut: an arc of 60 degrees, within one window of 4 (the taker of
   // a lost chip is a neighbouring window).
   void narrow_cut() {
@@ -713,8 +718,7 @@ TEST(ToolBreakageDetector, AnUnconfirmedSuspectDoesNotHideABreakAfterIt) {
 TEST(ToolBreakageDetector, LeavingThePartASwingAtAWindowsStartIsNoSuspect) {
   ToothCut cut;
   cut.s.engagement = 1.0;
-  const double intact[4] = {300, 300, 300, 300};
-  for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
+  cut.steady();
   cut.s.engagement = 0.9;
   // Window 1's first 2 of 20 samples at 30 %: over 3 samples it fell 0.47
   // of a mean window, over 5 (a quarter) 0.28, over the window 0.07.
@@ -738,8 +742,7 @@ TEST(ToolBreakageDetector, LeavingThePartASwingAtAWindowsStartIsNoSuspect) {
 TEST(ToolBreakageDetector, LeavingThePartATrendShrinksWithTheCommonFall) {
   ToothCut cut;
   cut.s.engagement = 1.0;
-  const double intact[4] = {300, 300, 300, 300};
-  for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
+  cut.steady();
   // The part's end: the windows fall 30 to 120 N; window 3 falls 45 N
   // beyond the common (median) change of 75 N.
   cut.s.engagement = 0.8;
@@ -797,7 +800,7 @@ TEST(ToolBreakageDetector, AfterARestartTheFirstWindowsWaitForACommonChange) {
   const double intact[4] = {300, 300, 300, 300};
   {
     ToothCut cut;
-    for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
+    cut.steady();
     cut.t += 1.0;  // a gap: restart
     ASSERT_EQ(cut.revolution(intact), -1);
     const double running_down[4] = {20, 15, 10, 8};  // the feed stops: every window falls
@@ -811,7 +814,7 @@ TEST(ToolBreakageDetector, AfterARestartTheFirstWindowsWaitForACommonChange) {
     // compared with yet) is decided as the last one closes, at the first
     // sample of the next revolution, 3/4 of a revolution after the break.
     ToothCut cut;
-    for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
+    cut.steady();
     cut.t += 1.0;
     ASSERT_EQ(cut.revolution(intact), -1);
     const double broken[4] = {300, 10, 300, 300};
@@ -824,8 +827,7 @@ TEST(ToolBreakageDetector, AfterARestartTheFirstWindowsWaitForACommonChange) {
 
 TEST(ToolBreakageDetector, AGapInTheSamplesRestartsTheComparison) {
   ToothCut cut;
-  const double intact[4] = {300, 300, 300, 300};
-  for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(intact), -1);
+  cut.steady();
   cut.t += 1.0;  // N was inactive for a second (a hold); the cut changed meanwhile
   const double other[4] = {300, 80, 300, 300};
   for (int r = 0; r < 4; ++r) EXPECT_EQ(cut.revolution(other), -1) << r;

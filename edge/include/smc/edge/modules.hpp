@@ -339,11 +339,12 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // changes and the last closed window's (entry, exit, depth and feed changes
 // move every window; runout repeats and cancels); a window's own fall the
 // revolution before is taken off (a trend), leaving the part shrunk as
-// the common fall shrank since. No decision in the first three compared revolutions but a
-// certain one, nor below 0.75 x the contact threshold. After the
-// feed fell by more than 5 % over a revolution, or once the drive's
-// engagement is below the most it reported (the cutter leaving the part), a
-// fall (from a quarter of its window on) is only a suspect, one per window:
+// the common fall shrank since. No decision in the first three compared
+// revolutions but a certain one, nor below 0.75 x the contact threshold.
+// After the feed fell by more than 5 % over a revolution, or once the
+// drive's engagement is below the most it reported (the cutter leaving the
+// part), a fall (from a quarter of its window on) is only a suspect, one per
+// window:
 // confirmed when another window within the cut's arc has taken the chip
 // (risen by half the threshold's share of the mean window, beyond the
 // common change and by half that in itself) within a revolution before or
