@@ -220,6 +220,19 @@ void ToolBreakageDetector::judge_pending(Signals& s) noexcept {
   s.breakage_drop = drop;
 }
 
+double ToolBreakageDetector::earlier_sum(int j, double x) const noexcept {
+  // C(m): the sum of the window's first m samples one revolution ago, linear
+  // between whole samples; before its first sample, the sample before it
+  // (the window before's last); past its last, its last one's value goes on.
+  const int last = previous_count_[j];
+  const double* c = &cumulative_[static_cast<size_t>(j * stride_)];
+  auto at = [&](int m) { return m <= 0 ? 0.0 : c[m - 1]; };
+  if (x <= 0) return x * previous_lead_[j];
+  if (x >= last) return at(last) + (x - last) * (at(last) - at(last - 1));
+  const int m = static_cast<int>(x);
+  return at(m) + (x - m) * (at(m + 1) - at(m));
+}
+
 void ToolBreakageDetector::close_window() noexcept {
   const int j = window_;
   const double mean = current_[static_cast<size_t>(count_ - 1)] / count_;
@@ -243,6 +256,8 @@ void ToolBreakageDetector::close_window() noexcept {
   feed_before2_[j] = feed_before_[j];
   feed_before_[j] = feed_now_;
   previous_count_[j] = count_;
+  previous_offset_[j] = offset_;
+  previous_lead_[j] = lead_;
   have_previous_[j] = true;
   std::copy_n(current_.begin(), count_, cumulative_.begin() + static_cast<long>(j) * stride_);
 }
@@ -256,6 +271,11 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
   if (s.engagement > most_engaged_) most_engaged_ = s.engagement;
   const int n = p_.teeth;
   const double phase = std::clamp(s.revolution_phase, 0.0, 1.0);
+  // The revolution clock's step over the last sample (a revolution ends
+  // between two samples: the phase carries its remainder over).
+  double step = phase - last_phase_;
+  if (step <= 0) step += 1.0;
+  last_phase_ = phase;
   const int w = std::min(n - 1, static_cast<int>(phase * n));
   if (w != window_) {
     if (window_ >= 0 && count_ > 0 && !partial_) {
@@ -265,9 +285,20 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
     partial_ = window_ < 0;
     window_ = w;
     count_ = 0;
+    // How far past the window's start (in samples) its first sample lies. A
+    // revolution that is not a whole number of samples (1503 rpm at 0.5 ms:
+    // 79.84) moves it by a fraction each revolution, and by nearly a whole
+    // sample when a revolution is one sample shorter: the teeth's sharp
+    // entries then move within the windows' first samples, which looks like
+    // a fall. Compared with the revolution before at the same angle, they
+    // do not (earlier_sum).
+    const double o = (phase - static_cast<double>(w) / n) / step;
+    offset_ = step > 0 && step < 0.5 && o >= 0 && o < 2 ? o : 0.0;
+    lead_ = last_force_;
   }
   const double force = std::sqrt(f.f_x_n * f.f_x_n + f.f_y_n * f.f_y_n + f.f_z_n * f.f_z_n);
   if (!std::isfinite(force)) return Status::kError;
+  last_force_ = force;
   if (count_ >= stride_) return Status::kOk;  // a window longer than the longest revolution's
   current_[static_cast<size_t>(count_)] =
       (count_ > 0 ? current_[static_cast<size_t>(count_ - 1)] : 0.0) + force;
@@ -279,7 +310,9 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
       count_ > previous_count_[j]) {
     return Status::kOk;
   }
-  const double before = cumulative_[static_cast<size_t>(j * stride_ + count_ - 1)];
+  // The same arc one revolution ago: its samples from `shift` on.
+  const double shift = std::clamp(offset_ - previous_offset_[j], -1.0, 1.0);
+  const double before = earlier_sum(j, count_ + shift) - earlier_sum(j, shift);
   judge(s, (current_[static_cast<size_t>(count_ - 1)] - before) / count_);
   return Status::kOk;
 }

@@ -836,6 +836,71 @@ TEST(ToolBreakageDetector, AGapInTheSamplesRestartsTheComparison) {
   EXPECT_EQ(cut.n.on_sample(cut.s), Status::kError);
 }
 
+namespace {
+
+// Four teeth cutting short, sharp pulses (a narrow cut: a tooth enters the
+// part, its force rising over 2.4 samples, and leaves it 43 degrees on),
+// driven by the spindle's angle rather than the sample count, at a speed
+// whose revolution is not a whole number of samples. The revolution clock steps as the core's does
+// (the measured speed x the sample period, the remainder carried over a
+// revolution's end), so its windows move against the teeth by a fraction of
+// a sample each revolution, and a revolution is a sample short now and then.
+struct SpindleCut {
+  ToolBreakageDetector n;
+  EdgeParameters p = params();
+  Signals s;
+  double t = 0;
+  double angle = 0.245;  // revolutions: a tooth enters 0.4 sample into each window
+  double phase = 0;
+  explicit SpindleCut(double rpm) : step(rpm / 60.0 * params().sample_period_s) {
+    n.configure(p);
+    n.reset();
+    s.feed_per_tooth_cmd_mm = 0.1;
+  }
+  const double step;
+  // Runs until `revolutions` revolutions of the clock have passed; tooth
+  // `broken` (-1: none) cuts nothing. True once N reports a break.
+  bool run(int revolutions, int broken = -1) {
+    for (int r = 0; r < revolutions;) {
+      t += p.sample_period_s;
+      angle += step;
+      phase += step;
+      if (phase >= 1.0 - 1e-9) {
+        phase -= 1.0;
+        ++r;
+      }
+      double f = 0;
+      for (int k = 0; k < 4; ++k) {
+        const double u = angle + 0.25 * k - std::floor(angle + 0.25 * k);
+        if (k != broken && u < 0.12) f += 300.0 * std::min({1.0, u / 0.03, (0.12 - u) / 0.03});
+      }
+      s.revolution_phase = phase;
+      s.sample = ForceSample{t, 0.6 * f, 0.8 * f, 0};
+      EXPECT_EQ(n.on_sample(s), Status::kOk);
+      if (s.tool_broken) return true;
+    }
+    return false;
+  }
+};
+
+}  // namespace
+
+// 1503 rpm at 0.5 ms (LinuxCNC's simulated spindle: 1500 rpm through its
+// rpm-to-rps gain of 0.0167): 79.84 samples a revolution. The windows' first
+// samples meet the teeth's sharp entries a fraction of a sample later each
+// revolution, and nearly a sample earlier on the short one; compared with
+// the revolution before at the same angle, nothing falls. (Compared sample
+// for sample, a window fell by 0.79 of the mean, and N reported a break.)
+TEST(ToolBreakageDetector, ARevolutionThatIsNotAWholeNumberOfSamplesIsNoBreak) {
+  SpindleCut cut(1503);
+  EXPECT_FALSE(cut.run(60));
+  const double largest = cut.n.take_largest_score();
+  std::printf("largest score over 60 revolutions at 1503 rpm: %.3f\n", largest);
+  EXPECT_LT(largest, 0.5 * cut.p.breakage_threshold);
+  // A tooth that breaks is still seen within the revolution after.
+  EXPECT_TRUE(cut.run(1, 2));
+}
+
 TEST(SpindleSpeedChatterSuppressor, PicksTheHighestPocketWithinTheMachinesRange) {
   EdgeParameters p = params();  // 4 teeth, 1000-3000 rpm here
   p.min_spindle_rpm = 1000;

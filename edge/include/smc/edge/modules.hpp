@@ -330,10 +330,11 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // N: tool-breakage detector (beyond Table 1; edge/README.md has the method
 // and the study). Splits each revolution of the core's revolution clock into
 // one window per tooth and follows the resultant force |F| in each, sample
-// by sample from an eighth of the window on, against the same samples one
+// by sample from an eighth of the window on, against the same arc one
 // revolution earlier (after Tlusty and Tarng's differences across teeth and
-// revolutions). A window falling beyond the windows' common change by more
-// than `breakage_threshold` x the mean window force, and by twice the other
+// revolutions; read between samples where this window's first sample lies,
+// as a revolution need not be a whole number of samples). A window falling beyond the windows'
+// common change by more than `breakage_threshold` x the mean window force, and by twice the other
 // windows' spread (chatter moves every window), is a tooth that lost its
 // chip. The common change is the smaller of the median of the windows' last
 // changes and the last closed window's (entry, exit, depth and feed changes
@@ -385,6 +386,9 @@ class ToolBreakageDetector final : public Module {
   static constexpr int kMaxTeeth = 64;
   void restart() noexcept;
   void close_window() noexcept;
+  // Window j's sum one revolution ago over its samples before (fractional)
+  // index x, x in [-1, its count + 1].
+  double earlier_sum(int j, double x) const noexcept;
   void judge(Signals& s, double change) noexcept;
   void judge_pending(Signals& s) noexcept;
   // Window a can hold the chip a broken tooth in window b left: another
@@ -401,6 +405,12 @@ class ToolBreakageDetector final : public Module {
   std::vector<double> cumulative_;  // per window: running sums of |F|, one revolution ago
   std::vector<double> current_;     // this window's running sums
   int previous_count_[kMaxTeeth] = {};
+  double previous_offset_[kMaxTeeth] = {};  // its first sample past its start, in samples
+  double previous_lead_[kMaxTeeth] = {};    // |F| of the sample just before its first
+  double offset_ = 0;                       // the same two for the window being summed
+  double lead_ = 0;
+  double last_phase_ = 0;                       // the revolution phase at the last sample
+  double last_force_ = 0;                       // and |F|
   double previous_[kMaxTeeth] = {};             // window means, one revolution ago
   double change_[kMaxTeeth] = {};               // each window's last change of mean
   double excess_[kMaxTeeth] = {};               // and its fall beyond the common change then
