@@ -15,7 +15,8 @@
 # every program that talks to it (exec). Its configuration is copied to DIR
 # (default /tmp/smc-linuxcnc), which that user owns: LinuxCNC writes its
 # parameter and position files there. Log: DIR/linuxcnc.log. One LinuxCNC per
-# host (fixed System V keys).
+# host (fixed System V keys). As root, start gives LinuxCNC's realtime threads
+# SCHED_FIFO priority 70 (SMC_CNC_RT_PRIORITY; 0 leaves them as they start).
 #
 # --dyno CONFIG puts the virtual dynamometer (smc_dyno, built with the edge)
 # in the servo thread: LinuxCNC's own motion then cuts the part of CONFIG (a
@@ -32,7 +33,7 @@ dyno_plant=
 action=${1:-}
 [[ $# -gt 0 ]] && shift
 case "$action" in
-  -h|--help|"") sed -n '2,18p' "$0"; [[ -n $action ]]; exit $? ;;
+  -h|--help|"") sed -n '2,19p' "$0"; [[ -n $action ]]; exit $? ;;
 esac
 
 as=()
@@ -100,10 +101,29 @@ cd "$dir"
 if [[ $action == foreground ]]; then
   exec "${launch[@]}"
 fi
+# LinuxCNC's realtime threads (the servo thread, rtapi_app:T#N) get
+# SCHED_FIFO only from a setuid-root rtapi_app; run as the mill's user they
+# are ordinary threads, which a busy host starved past the edge's 250 ms
+# stale-record limit (3 runs in 36 with two CPU hogs). As root, give them
+# the FIFO priority a realtime install would (SMC_CNC_RT_PRIORITY, default
+# 70; 0 leaves them as they are). Best effort: without CAP_SYS_NICE (some
+# containers) they stay as they are, and the log says so.
+realtime_threads() {
+  local prio=${SMC_CNC_RT_PRIORITY:-70} app t
+  [[ $prio -gt 0 && $(id -u) -eq 0 ]] || return 0
+  app=$(pgrep -x rtapi_app | head -1)
+  [[ -n $app ]] || return 0
+  for t in /proc/"$app"/task/*; do
+    [[ $(cat "$t/comm" 2>/dev/null) == rtapi_app:T* ]] || continue
+    chrt -f -p "$prio" "${t##*/}" >/dev/null 2>&1 ||
+      echo "run.sh: could not give LinuxCNC's thread ${t##*/} SCHED_FIFO $prio (no CAP_SYS_NICE?): a busy host may stall it" >&2
+  done
+}
 setsid "${launch[@]}" >"$dir/linuxcnc.log" 2>&1 </dev/null &
 pid=$!
 for _ in $(seq 1 300); do
   if [[ -f $dir/ready ]]; then
+    realtime_threads
     echo "run.sh: LinuxCNC ready (config and log in $dir; stop: $0 stop --dir $dir)"
     exit 0
   fi
