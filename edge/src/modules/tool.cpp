@@ -85,7 +85,17 @@ bool ToolBreakageDetector::adjacent(int a, int b) const noexcept {
   return std::min(d, n - d) <= reach_;
 }
 
-void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
+double ToolBreakageDetector::relative_common(int exclude) const noexcept {
+  double v[kMaxTeeth];
+  int count = 0;
+  for (int k = 0; k < p_.teeth; ++k) {
+    const double base = previous_[k] - change_[k];  // its mean the revolution before
+    if (k != exclude && compared_[k] && base > 0) v[count++] = change_[k] / base;
+  }
+  return count > 0 ? median_of(v, count) : 0.0;
+}
+
+void ToolBreakageDetector::judge(Signals& s, double change, double earlier) noexcept {
   const int n = p_.teeth;
   // Settling: the windows have been compared for fewer than
   // kSettleRevolutions (the controller's entry transient moves them).
@@ -142,6 +152,11 @@ void ToolBreakageDetector::judge(Signals& s, double change) noexcept {
   const double drop = (excess - trend) / window_mean;
   if (excess - trend < kSpreadFactor * spread) return;
   if (s.tool_broken) return;
+  // In proportion to each window's own force, too: with runout the windows
+  // differ, and a common change (feed, depth, a speed change's restart)
+  // moves each by its share, the heaviest most; a tooth that lost its chip
+  // loses its own force.
+  if (earlier > 0 && relative_common(window_) - change / earlier <= p_.breakage_threshold) return;
   // A certain fall: more than kCertainDrop of a mean window, alone, not
   // leaving the part. Only such a fall decides while settling, and it is a
   // break however the feed moved: a tooth that breaks then is compared with
@@ -214,6 +229,8 @@ void ToolBreakageDetector::judge_pending(Signals& s) noexcept {
   const double excess = median - change_[w];
   const double drop = excess / pending_mean_;
   if (s.tool_broken || drop <= kCertainDrop || excess < kSpreadFactor * spread) return;
+  const double base = previous_[w] - change_[w];
+  if (base > 0 && relative_common(w) - change_[w] / base <= p_.breakage_threshold) return;
   largest_score_ = std::max(largest_score_, drop);
   s.tool_broken = true;
   s.breakage_window = w;
@@ -313,7 +330,7 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
   // The same arc one revolution ago: its samples from `shift` on.
   const double shift = std::clamp(offset_ - previous_offset_[j], -1.0, 1.0);
   const double before = earlier_sum(j, count_ + shift) - earlier_sum(j, shift);
-  judge(s, (current_[static_cast<size_t>(count_ - 1)] - before) / count_);
+  judge(s, (current_[static_cast<size_t>(count_ - 1)] - before) / count_, before / count_);
   return Status::kOk;
 }
 

@@ -333,10 +333,13 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // by sample from an eighth of the window on, against the same arc one
 // revolution earlier (after Tlusty and Tarng's differences across teeth and
 // revolutions; read between samples where this window's first sample lies,
-// as a revolution need not be a whole number of samples). A window falling beyond the windows'
-// common change by more than `breakage_threshold` x the mean window force, and by twice the other
-// windows' spread (chatter moves every window), is a tooth that lost its
-// chip. The common change is the smaller of the median of the windows' last
+// as a revolution need not be a whole number of samples). A window falling
+// beyond the windows' common change by more than `breakage_threshold` x the
+// mean window force, by twice the other windows' spread (chatter moves
+// every window), and by more than the threshold as a share of its own force
+// beyond the others' median share (with runout a common change moves each
+// window in proportion to its force), is a tooth that lost its chip. The
+// common change is the smaller of the median of the windows' last
 // changes and the last closed window's (entry, exit, depth and feed changes
 // move every window; runout repeats and cancels); a window's own fall the
 // revolution before is taken off (a trend), leaving the part shrunk as
@@ -389,7 +392,12 @@ class ToolBreakageDetector final : public Module {
   // Window j's sum one revolution ago over its samples before (fractional)
   // index x, x in [-1, its count + 1].
   double earlier_sum(int j, double x) const noexcept;
-  void judge(Signals& s, double change) noexcept;
+  // change: this window's mean so far less the same arc's a revolution
+  // before (earlier).
+  void judge(Signals& s, double change, double earlier) noexcept;
+  // The median of the other compared windows' last changes, each as a share
+  // of its own mean the revolution before.
+  double relative_common(int exclude) const noexcept;
   void judge_pending(Signals& s) noexcept;
   // Window a can hold the chip a broken tooth in window b left: another
   // window within reach_ of it, either way round (the next tooth cuts it a
