@@ -129,17 +129,21 @@ void ToolBreakageDetector::judge(Signals& s, double change, double earlier) noex
     }
   }
   // The other windows' spread about the common change: chatter moves every
-  // window a lot, a break one window.
+  // window a lot, a break one window. The window before this one, if it
+  // fell, is left out: a tooth's arc in the part may straddle two windows,
+  // and a tooth that broke late in the first lost the rest of its chip in
+  // this one.
+  const int before = (window_ + n - 1) % n;
   double spread = 0;
   for (int k = 0; k < n; ++k) {
-    if (k != window_) spread = std::max(spread, std::fabs(change_[k] - median));
+    if (k == window_ || (k == before && change_[k] < median)) continue;
+    spread = std::max(spread, std::fabs(change_[k] - median));
   }
   // In a fast common fall (the cutter leaving the part) the median of the
   // revolution's changes lags: the window just closed is the freshest
   // measure of it, and the smaller of the two is taken. A window already
   // falling the revolution before (one side of the cutter leaves first) is a
   // trend, not a break: that fall is taken off (a second difference).
-  const int before = (window_ + n - 1) % n;
   const double common = compared_[before] ? std::min(median, change_[before]) : median;
   const double excess = common - change;
   // Leaving the part (engagement below the most the drive reported since

@@ -336,7 +336,8 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // as a revolution need not be a whole number of samples). A window falling
 // beyond the windows' common change by more than `breakage_threshold` x the
 // mean window force, by twice the other windows' spread (chatter moves
-// every window), and by more than the threshold as a share of its own force
+// every window; the window before, if it fell, is left out: a tooth's arc
+// may straddle the two), and by more than the threshold as a share of its own force
 // beyond the others' median share (with runout a common change moves each
 // window in proportion to its force), is a tooth that lost its chip. The
 // common change is the smaller of the median of the windows' last
