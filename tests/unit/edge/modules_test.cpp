@@ -879,23 +879,24 @@ namespace {
 // Four teeth cutting short, sharp pulses (a narrow cut: a tooth enters the
 // part, its force rising over 2.4 samples, and leaves it 43 degrees on),
 // driven by the spindle's angle rather than the sample count, at a speed
-// whose revolution is not a whole number of samples. The revolution clock steps as the core's does
-// (the measured speed x the sample period, the remainder carried over a
-// revolution's end), so its windows move against the teeth by a fraction of
-// a sample each revolution, and a revolution is a sample short now and then.
+// whose revolution is not a whole number of samples. The revolution clock
+// steps as the core's does (the measured speed x the sample period, the
+// remainder carried over a revolution's end), so its windows move against
+// the teeth by a fraction of a sample each revolution, and a revolution is
+// a sample short now and then.
 struct SpindleCut {
   ToolBreakageDetector n;
   EdgeParameters p = params();
   Signals s;
+  const double step;  // revolutions a sample
   double t = 0;
   double angle = 0.245;  // revolutions: a tooth enters 0.4 sample into each window
   double phase = 0;
-  explicit SpindleCut(double rpm) : step(rpm / 60.0 * params().sample_period_s) {
+  explicit SpindleCut(double rpm) : step(rpm / 60.0 * p.sample_period_s) {
     n.configure(p);
     n.reset();
     s.feed_per_tooth_cmd_mm = 0.1;
   }
-  const double step;
   // Runs until `revolutions` revolutions of the clock have passed; tooth
   // `broken` (-1: none) cuts nothing. True once N reports a break.
   bool run(int revolutions, int broken = -1) {

@@ -337,11 +337,11 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // beyond the windows' common change by more than `breakage_threshold` x the
 // mean window force, by twice the other windows' spread (chatter moves
 // every window; the window before, if it fell, is left out: a tooth's arc
-// may straddle the two), and by more than the threshold as a share of its own force
-// beyond the others' median share (with runout a common change moves each
-// window in proportion to its force), is a tooth that lost its chip. The
-// common change is the smaller of the median of the windows' last
-// changes and the last closed window's (entry, exit, depth and feed changes
+// may straddle the two), and by more than the threshold as a share of its
+// own force beyond the others' median share (with runout a common change
+// moves each window in proportion to its force), is a tooth that lost its
+// chip. The common change is the smaller of the median of the windows'
+// last changes and the last closed window's (entry, exit, depth and feed changes
 // move every window; runout repeats and cancels); a window's own fall the
 // revolution before is taken off (a trend), leaving the part shrunk as
 // the common fall shrank since. No decision in the first three compared
