@@ -373,7 +373,9 @@ class ToolBreakageDetector final : public Module {
   // For the breakage study: the largest score of an immediate decision (the
   // drop beyond the common change, share of the mean window force) since the
   // last call, whether it fired or not (suspects are left out: confirmation
-  // decides them); each window's change over the last revolution and mean.
+  // decides them; so are falls within twice the spread or not standing out
+  // as a share of the window's own force); each window's change over the
+  // last revolution and mean.
   double take_largest_score() noexcept {
     const double v = largest_score_;
     largest_score_ = 0;
