@@ -63,7 +63,6 @@ void ToolBreakageDetector::restart() noexcept {
   std::fill(std::begin(change_), std::end(change_), 0.0);
   std::fill(std::begin(excess_), std::end(excess_), 0.0);
   std::fill(std::begin(excess_before_), std::end(excess_before_), 0.0);
-  std::fill(std::begin(common_before_), std::end(common_before_), 0.0);
   std::fill(std::begin(change_before_), std::end(change_before_), 0.0);
   window_ = -1;
   count_ = 0;
@@ -146,13 +145,13 @@ void ToolBreakageDetector::judge(Signals& s, double change, double earlier) noex
   // trend, not a break: that fall is taken off (a second difference).
   const double common = compared_[before] ? std::min(median, change_[before]) : median;
   const double excess = common - change;
-  // Leaving the part (engagement below the most the drive reported since
-  // the (re)start; NaN: unknown), the trend shrinks with the common fall:
-  // the part's end passing under the cutter makes it fall fastest at first.
+  // But not leaving the part (engagement below the most the drive reported
+  // since the (re)start; NaN: unknown): every fall is then a suspect that
+  // another window must take up (below), and at a full slot's exit the
+  // window the part's end crossed the revolution before may be the one
+  // whose tooth breaks next; its trend would hide the break.
   const bool leaving = s.engagement < most_engaged_ - 1e-9;
-  const double was = common_before_[window_];
-  const double trend = std::max(0.0, excess_[window_]) *
-                       (leaving && was < 0 ? std::clamp(common / was, 0.0, 1.0) : 1.0);
+  const double trend = leaving ? 0.0 : std::max(0.0, excess_[window_]);
   const double drop = (excess - trend) / window_mean;
   if (excess - trend < kSpreadFactor * spread) return;
   if (s.tool_broken) return;
@@ -189,8 +188,15 @@ void ToolBreakageDetector::judge(Signals& s, double change, double earlier) noex
   // reach N: it is active only in the cutting step.
   if (!certain && (feed_before_[window_] < (1.0 - kFeedFall) * feed_before2_[window_] || leaving)) {
     if (drop > p_.breakage_threshold && kSuspectFrom * count_ >= previous_count_[window_]) {
-      if (suspect_drop_[window_] <= 0) suspect_closed_[window_] = closed_;
-      suspect_drop_[window_] = std::max(suspect_drop_[window_], drop);
+      // A suspect lasts a revolution from its window's last fall: a window
+      // the part's end made a suspect may fall again when its tooth breaks,
+      // and its taker comes after that.
+      if (suspect_drop_[window_] <= 0 || suspect_closed_[window_] != closed_) {
+        suspect_closed_[window_] = closed_;
+        suspect_drop_[window_] = drop;
+      } else {
+        suspect_drop_[window_] = std::max(suspect_drop_[window_], drop);
+      }
       // The tooth that took the chip may come first in the revolution (its
       // window closed already, this revolution or the one before): then
       // the suspect is confirmed at once.
@@ -268,7 +274,6 @@ void ToolBreakageDetector::close_window() noexcept {
   int compared = 0;
   const double median = compared_median(-1, compared);
   excess_[j] = have_previous_[j] ? median - change_[j] : 0.0;
-  common_before_[j] = have_previous_[j] ? median : 0.0;
   // A suspect no window confirmed within a revolution: not a break.
   for (int k = 0; k < p_.teeth; ++k) {
     if (suspect_drop_[k] > 0 && closed_ - suspect_closed_[k] > p_.teeth) suspect_drop_[k] = 0;

@@ -734,27 +734,51 @@ TEST(ToolBreakageDetector, LeavingThePartASwingAtAWindowsStartIsNoSuspect) {
 
 // The fall of a window beyond the common change the revolution before is a
 // trend (one side of the cutter leaves the part first) and is taken off its
-// next fall. A part's end passing under the cutter makes every window fall
-// fastest at first: with the common fall ten times smaller a revolution on,
-// last revolution's excess is no measure of this one's, and a break then
-// would be hidden behind it. Leaving the part, the trend shrinks with the
-// common fall.
-TEST(ToolBreakageDetector, LeavingThePartATrendShrinksWithTheCommonFall) {
+// next fall. Leaving the part (the drive's engagement below its most) no
+// trend is taken off: every fall is then a suspect that another window must
+// take up, and at a full slot's exit a window the part's end crossed the
+// revolution before may be the one whose tooth breaks next (the study's
+// 1100 rpm, 50 mm, 0.29 mm cut with 20 um of runout).
+TEST(ToolBreakageDetector, LeavingThePartNoTrendIsTakenOff) {
   ToothCut cut;
   cut.s.engagement = 1.0;
   cut.steady();
-  // The part's end: the windows fall 30 to 120 N; window 3 falls 45 N
-  // beyond the common (median) change of 75 N.
+  // The part's end: every window falls 10 N, window 3 100 N (90 N beyond
+  // the common change: a suspect nothing takes up).
   cut.s.engagement = 0.8;
-  const double fast[4] = {270, 240, 210, 180};
-  ASSERT_EQ(cut.revolution(fast), -1);
-  // A revolution on the common fall is 10 N; window 3 falls 110 N (a
-  // suspect: leaving the part), and window 0 takes its chip.
+  const double edge[4] = {290, 290, 290, 200};
+  ASSERT_EQ(cut.revolution(edge), -1);
+  // A revolution on window 3's tooth breaks: it falls 140 N, 130 N beyond
+  // the common change (40 N beyond it less the trend: under the threshold).
   cut.s.engagement = 0.7;
-  const double broken[4] = {260, 230, 200, 70};
+  const double broken[4] = {280, 280, 280, 60};
   EXPECT_EQ(cut.revolution(broken), -1) << "a suspect, no taker yet";
-  const double taken[4] = {330, 220, 190, 60};
-  EXPECT_GE(cut.revolution(taken), 0) << "a 100 N fall beyond a 10 N common one, taken up";
+  // Window 0 takes its chip.
+  const double taken[4] = {400, 280, 280, 55};
+  EXPECT_GE(cut.revolution(taken), 0) << "the whole fall, taken up";
+  EXPECT_EQ(cut.s.breakage_window, 3);
+}
+
+// A suspect lasts a revolution from its window's last fall, not its first:
+// at a full slot's exit the part's end makes a window a suspect, and the
+// tooth that breaks in the next revolution falls in it again (the study's
+// 750 rpm, 50 mm, 0.21 mm cut: the taker came after the first suspect had
+// run out).
+TEST(ToolBreakageDetector, ASuspectThatFallsAgainIsKeptFromItsLastFall) {
+  ToothCut cut;
+  cut.s.engagement = 1.0;
+  cut.steady();
+  cut.s.engagement = 0.8;
+  // Every window falls 20 N, window 3 120 N: a suspect nothing takes up.
+  const double edge[4] = {280, 280, 280, 180};
+  ASSERT_EQ(cut.revolution(edge), -1);
+  // The others hold; window 3's tooth breaks: it falls again.
+  cut.s.engagement = 0.7;
+  const double broken[4] = {280, 280, 280, 30};
+  ASSERT_EQ(cut.revolution(broken), -1) << "a suspect again, no taker yet";
+  // Window 0 takes its chip, more than a revolution after the first fall.
+  const double taken[4] = {400, 280, 280, 30};
+  EXPECT_GE(cut.revolution(taken), 0) << "the second fall, taken up";
   EXPECT_EQ(cut.s.breakage_window, 3);
 }
 

@@ -343,17 +343,16 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // chip. The common change is the smaller of the median of the windows'
 // last changes and the last closed window's (entry, exit, depth and feed changes
 // move every window; runout repeats and cancels); a window's own fall the
-// revolution before is taken off (a trend), leaving the part shrunk as
-// the common fall shrank since. No decision in the first three compared
-// revolutions but a certain one, nor below 0.75 x the contact threshold.
-// After the feed fell by more than 5 % over a revolution, or once the
-// drive's engagement is below the most it reported (the cutter leaving the
-// part), a fall (from a quarter of its window on) is only a suspect, one per
-// window:
-// confirmed when another window within the cut's arc has taken the chip
-// (risen by half the threshold's share of the mean window, beyond the
-// common change and by half that in itself) within a revolution before or
-// after it. f is latched until N is reset.
+// revolution before is taken off (a trend) but while leaving the part. No
+// decision in the first three compared revolutions but a certain one, nor
+// below 0.75 x the contact threshold. After the feed fell by more than 5 %
+// over a revolution, or once the drive's engagement is below the most it
+// reported (the cutter leaving the part), a fall (from a quarter of its
+// window on) is only a suspect, one per window: confirmed when another
+// window within the cut's arc has taken the chip (risen by half the
+// threshold's share of the mean window, beyond the common change and by
+// half that in itself) within a revolution before or after the window's
+// last fall. f is latched until N is reset.
 class ToolBreakageDetector final : public Module {
  public:
   ToolBreakageDetector() noexcept : Module(ModuleId::N) {}
@@ -425,7 +424,6 @@ class ToolBreakageDetector final : public Module {
   double previous_[kMaxTeeth] = {};             // window means, one revolution ago
   double change_[kMaxTeeth] = {};               // each window's last change of mean
   double excess_[kMaxTeeth] = {};               // and its fall beyond the common change then
-  double common_before_[kMaxTeeth] = {};        // the common change at its last close
   double excess_before_[kMaxTeeth] = {};        // the same, the revolution before
   double change_before_[kMaxTeeth] = {};        // each window's change the revolution before
   static constexpr double kSpreadFactor = 2.0;  // a break's fall x the others' spread
