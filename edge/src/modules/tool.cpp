@@ -73,6 +73,7 @@ void ToolBreakageDetector::restart() noexcept {
 
 void ToolBreakageDetector::reset() noexcept {
   restart();
+  unfilled_ = 0;
   last_t_s_ = -1;
   largest_score_ = 0;
 }
@@ -291,7 +292,14 @@ void ToolBreakageDetector::close_window() noexcept {
 Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
   const ForceSample& f = s.sample;
   // A gap in the samples (N was inactive): the windows of before are stale.
-  if (last_t_s_ >= 0 && f.t_s - last_t_s_ > 1.5 * p_.sample_period_s) restart();
+  // Nor is the revolution after it filled: while the feed was held the tool
+  // sprang back, and its first revolution back cuts what the deflection had
+  // left (edge/README.md, module N).
+  const bool resumed = last_t_s_ >= 0 && f.t_s - last_t_s_ > 1.5 * p_.sample_period_s;
+  if (resumed) {
+    restart();
+    unfilled_ = 1.0;
+  }
   last_t_s_ = f.t_s;
   feed_now_ = s.feed_per_tooth_cmd_mm;
   if (s.engagement > most_engaged_) most_engaged_ = s.engagement;
@@ -302,13 +310,14 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
   double step = phase - last_phase_;
   if (step <= 0) step += 1.0;
   last_phase_ = phase;
+  if (!resumed && unfilled_ > 0) unfilled_ -= step;
   const int w = std::min(n - 1, static_cast<int>(phase * n));
   if (w != window_) {
     if (window_ >= 0 && count_ > 0 && !partial_) {
       close_window();
       if (pending_window_ >= 0) judge_pending(s);
     }
-    partial_ = window_ < 0;
+    partial_ = window_ < 0 || unfilled_ > 1e-9;
     window_ = w;
     count_ = 0;
     // How far past the window's start (in samples) its first sample lies. A

@@ -352,7 +352,8 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // window within the cut's arc has taken the chip (risen by half the
 // threshold's share of the mean window, beyond the common change and by
 // half that in itself) within a revolution before or after the window's
-// last fall. f is latched until N is reset.
+// last fall. A gap in the samples (N was inactive) restarts the windows a
+// revolution after N resumes. f is latched until N is reset.
 class ToolBreakageDetector final : public Module {
  public:
   ToolBreakageDetector() noexcept : Module(ModuleId::N) {}
@@ -452,6 +453,7 @@ class ToolBreakageDetector final : public Module {
   static constexpr int kMinPeers = 2;  // other windows compared for a common change
   int window_ = -1;                    // the window being summed
   bool partial_ = false;               // sampling started inside it: not compared
+  double unfilled_ = 0;                // revolutions to pass after a gap before filling
   int count_ = 0;                      // its samples so far
   double last_t_s_ = -1;               // time of the last sample taken (a gap restarts the windows)
   double largest_score_ = 0;
