@@ -549,10 +549,13 @@ TEST_F(LinuxCncCell, ThePapersJobsRunOnLinuxCncAsOnTheSimulatedMill) {
   // The figures agree with smc-edge simulate on the configuration the cell
   // sent (smc-cell job show --config) and the dynamometer's mill:
   //  - passes and chatter events: equal;
-  //  - peak force: within 5 % of F_ref without chatter; within 10 % with
-  //    it, since the peak is reached while chatter grows, and LinuxCNC's
-  //    hold decelerates (10 mm/s at 500 mm/s²: 20 ms, half a revolution)
-  //    where the simulated mill stops at once;
+  //  - peak force: within 5 % of F_ref without chatter. With chatter the
+  //    peak is reached while chatter grows, and LinuxCNC's hold decelerates
+  //    (10 mm/s at 500 mm/s²: 20 ms, half a revolution) where the simulated
+  //    mill stops at once, so LinuxCNC's peak is the higher: up to 15 % of
+  //    F_ref above the simulated mill's, at most 10 % below it (five runs on
+  //    the paper's SMC II job: 281.6-292.1 N against 273.7 N, +4 to +10 %;
+  //    the 10 % this bound was first is too tight);
   //  - cycle time: LinuxCNC's is longer by what the simulated mill
   //    idealises: its program starts the spindle and approaches the part
   //    at the axes' acceleration limits (up to 6 s), and each rewrite adds a
@@ -583,8 +586,11 @@ TEST_F(LinuxCncCell, ThePapersJobsRunOnLinuxCncAsOnTheSimulatedMill) {
         sim.peak_force_n(), sim.force_reference_n(), lc.cycle_time_s(), sim.cycle_time_s());
     EXPECT_EQ(lc.passes_completed(), sim.passes_completed());
     EXPECT_EQ(lc.chatter_events(), sim.chatter_events());
-    EXPECT_NEAR(lc.peak_force_n(), sim.peak_force_n(),
-                (sim.chatter_events() > 0 ? 0.10 : 0.05) * sim.force_reference_n());
+    const bool chatter = sim.chatter_events() > 0;
+    EXPECT_LE(lc.peak_force_n() - sim.peak_force_n(),
+              (chatter ? 0.15 : 0.05) * sim.force_reference_n());
+    EXPECT_GE(lc.peak_force_n() - sim.peak_force_n(),
+              -(chatter ? 0.10 : 0.05) * sim.force_reference_n());
     const double extra = lc.cycle_time_s() - sim.cycle_time_s();
     EXPECT_GE(extra, 0.0);
     EXPECT_LE(extra, 6.0 + 4.0 * sim.program_rewrites());
