@@ -192,12 +192,9 @@ void ToolBreakageDetector::judge(Signals& s, double change, double earlier) noex
       // A suspect lasts a revolution from its window's last fall: a window
       // the part's end made a suspect may fall again when its tooth breaks,
       // and its taker comes after that.
-      if (suspect_drop_[window_] <= 0 || suspect_closed_[window_] != closed_) {
-        suspect_closed_[window_] = closed_;
-        suspect_drop_[window_] = drop;
-      } else {
-        suspect_drop_[window_] = std::max(suspect_drop_[window_], drop);
-      }
+      if (suspect_closed_[window_] != closed_) suspect_drop_[window_] = 0;  // a new fall
+      suspect_closed_[window_] = closed_;
+      suspect_drop_[window_] = std::max(suspect_drop_[window_], drop);
       // The tooth that took the chip may come first in the revolution (its
       // window closed already, this revolution or the one before): then
       // the suspect is confirmed at once.

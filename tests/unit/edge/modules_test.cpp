@@ -566,6 +566,20 @@ struct ToothCut {
     const double level[4] = {300, 300, 300, 300};
     for (int r = 0; r < 6; ++r) ASSERT_EQ(revolution(level), -1);
   }
+  // Leaving the part (the drive's engagement 1, then 0.8 and 0.7): the
+  // part's end (`edge`), then a tooth breaking (`broken`), each a suspect
+  // with no taker yet, then another window taking its chip (`taken`);
+  // returns the sample at which f rose in that last revolution (-1: none).
+  int exit_then_break(const double (&edge)[4], const double (&broken)[4],
+                      const double (&taken)[4]) {
+    s.engagement = 1.0;
+    steady();
+    s.engagement = 0.8;
+    EXPECT_EQ(revolution(edge), -1) << "the part's end: nothing takes it up";
+    s.engagement = 0.7;
+    EXPECT_EQ(revolution(broken), -1) << "a suspect, no taker yet";
+    return revolution(taken);
+  }
   // A narrow cut: an arc of 60 degrees, within one window of 4 (the taker of
   // a lost chip is a neighbouring window).
   void narrow_cut() {
@@ -741,21 +755,14 @@ TEST(ToolBreakageDetector, LeavingThePartASwingAtAWindowsStartIsNoSuspect) {
 // 1100 rpm, 50 mm, 0.29 mm cut with 20 um of runout).
 TEST(ToolBreakageDetector, LeavingThePartNoTrendIsTakenOff) {
   ToothCut cut;
-  cut.s.engagement = 1.0;
-  cut.steady();
-  // The part's end: every window falls 10 N, window 3 100 N (90 N beyond
-  // the common change: a suspect nothing takes up).
-  cut.s.engagement = 0.8;
+  // The part's end: every window falls 10 N, window 3 100 N (90 N beyond the
+  // common change). A revolution on, window 3's tooth breaks: it falls
+  // 140 N, 130 N beyond the common change (40 N beyond it less the trend:
+  // under the threshold). Then window 0 takes its chip.
   const double edge[4] = {290, 290, 290, 200};
-  ASSERT_EQ(cut.revolution(edge), -1);
-  // A revolution on window 3's tooth breaks: it falls 140 N, 130 N beyond
-  // the common change (40 N beyond it less the trend: under the threshold).
-  cut.s.engagement = 0.7;
   const double broken[4] = {280, 280, 280, 60};
-  EXPECT_EQ(cut.revolution(broken), -1) << "a suspect, no taker yet";
-  // Window 0 takes its chip.
   const double taken[4] = {400, 280, 280, 55};
-  EXPECT_GE(cut.revolution(taken), 0) << "the whole fall, taken up";
+  EXPECT_GE(cut.exit_then_break(edge, broken, taken), 0) << "the whole fall, taken up";
   EXPECT_EQ(cut.s.breakage_window, 3);
 }
 
@@ -766,19 +773,13 @@ TEST(ToolBreakageDetector, LeavingThePartNoTrendIsTakenOff) {
 // run out).
 TEST(ToolBreakageDetector, ASuspectThatFallsAgainIsKeptFromItsLastFall) {
   ToothCut cut;
-  cut.s.engagement = 1.0;
-  cut.steady();
-  cut.s.engagement = 0.8;
-  // Every window falls 20 N, window 3 120 N: a suspect nothing takes up.
+  // The part's end: every window falls 20 N, window 3 120 N. The others
+  // hold; window 3's tooth breaks and it falls again. Window 0 takes its
+  // chip, more than a revolution after the first fall.
   const double edge[4] = {280, 280, 280, 180};
-  ASSERT_EQ(cut.revolution(edge), -1);
-  // The others hold; window 3's tooth breaks: it falls again.
-  cut.s.engagement = 0.7;
   const double broken[4] = {280, 280, 280, 30};
-  ASSERT_EQ(cut.revolution(broken), -1) << "a suspect again, no taker yet";
-  // Window 0 takes its chip, more than a revolution after the first fall.
   const double taken[4] = {400, 280, 280, 30};
-  EXPECT_GE(cut.revolution(taken), 0) << "the second fall, taken up";
+  EXPECT_GE(cut.exit_then_break(edge, broken, taken), 0) << "the second fall, taken up";
   EXPECT_EQ(cut.s.breakage_window, 3);
 }
 
