@@ -5,7 +5,7 @@
 //
 //   build/release/bin/smc-bench-breakage [--speeds 750,1100,...] [--widths 25,37,50]
 //       [--fractions 0.3,0.6,0.9] [--runouts 0,10,20] [--critical-feed 0.03] [--tooth T]
-//       [--timings 0.1,0.5,0.9] [--seeds N] [--quick] [--verbose]
+//       [--timings 0.1,0.5,0.9] [--mill-model FILE] [--seeds N] [--quick] [--verbose]
 //
 // For each speed and width the critical depth is found by time-domain
 // simulation (smc::machining) at --critical-feed (default 0.03 mm/tooth:
@@ -27,6 +27,10 @@
 // Breaks N cannot see are counted apart too: of a tooth whose chip (runout
 // kinematics, at the feed of the moment) is below the threshold's share of
 // the mean chip, or while the mean window force is below N's floor.
+// --mill-model FILE: the simulated mill cuts with that model (e.g.
+// cell/models/paper_face_mill_mismatched.textproto: a softer tool, harder
+// material), with the study's width and runout; the critical depth and the
+// depths stay the configuration's, as a cell would plan them.
 // Progress on stderr; SMC_STUDY_TRACE=T prints the windows around time T.
 
 #include <algorithm>
@@ -34,6 +38,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -68,9 +73,12 @@ struct Outcome {
   bool false_after_chatter = false;  // an intact cutter's detection after a chatter
 };
 
-Outcome run_one(const smc::config::SupervisorConfig& raw, bool verbose, double break_at_s = -1) {
+// `mill_model`: the mill that cuts (the configuration's model, or
+// --mill-model's with the study's width and runout).
+Outcome run_one(const smc::config::SupervisorConfig& raw,
+                const smc::config::MillingModel& mill_model, bool verbose, double break_at_s = -1) {
   EdgeConfig cfg = edge_config_from_proto(raw);
-  SimulatedMill mill(raw.milling_model(), raw.simulation(), cfg.params.sample_period_s);
+  SimulatedMill mill(mill_model, raw.simulation(), cfg.params.sample_period_s);
   EdgeCore core(cfg, mill);
   core.start();
   // A shadow of N fed the samples N is fed, for its scores.
@@ -153,6 +161,7 @@ int main(int argc, char** argv) {
   smc::bench::StudyGrid grid;
   int tooth = 2;
   double critical_feed = 0.03;
+  std::string mill_model_file;
   // When the tooth breaks: a share of the path in contact, or revolutions
   // after the first revolution in contact.
   struct Timing {
@@ -166,6 +175,8 @@ int main(int argc, char** argv) {
     const bool more = i + 1 < argc;
     if (std::strcmp(argv[i], "--critical-feed") == 0 && more) {
       critical_feed = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--mill-model") == 0 && more) {
+      mill_model_file = argv[++i];
     } else if (std::strcmp(argv[i], "--tooth") == 0 && more) {
       tooth = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--timings") == 0 && more) {
@@ -188,7 +199,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr,
                    "usage: %s [--speeds LIST] [--widths LIST] [--fractions LIST] "
                    "[--runouts LIST_UM] [--critical-feed MM] [--tooth T] [--timings LIST] "
-                   "[--seeds N] [--quick] [--verbose]\n",
+                   "[--mill-model FILE] [--seeds N] [--quick] [--verbose]\n",
                    argv[0]);
       return 2;
     }
@@ -202,6 +213,18 @@ int main(int argc, char** argv) {
   const bool verbose = grid.verbose;
   auto base = smc::documents::load_supervisor_config(std::string(SMC_SOURCE_DIR) +
                                                      "/edge/configs/smc2_plus.textproto");
+  smc::config::MillingModel plant;
+  if (!mill_model_file.empty()) {
+    try {
+      smc::documents::load(mill_model_file, plant);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr,
+                   "--mill-model: %s (a MillingModel in text format, e.g. "
+                   "cell/models/paper_face_mill_mismatched.textproto)\n",
+                   e.what());
+      return 2;
+    }
+  }
   const double fpt = 0.1;
   const double threshold = edge_config_from_proto(base).params.breakage_threshold;
   const double floor_n = ToolBreakageDetector::force_floor_n(edge_config_from_proto(base).params);
@@ -209,8 +232,9 @@ int main(int argc, char** argv) {
       "module N: threshold %.2f (a tooth window's fall beyond the common change, share of the "
       "mean window); tooth %d loses its edge (with runout, tooth 1 stands out furthest); "
       "programmed %.2f mm/tooth, depths as fractions of the critical depth at %.3f mm/tooth, "
-      "%d seed(s)\n\n",
-      threshold, tooth, fpt, critical_feed, seeds);
+      "%d seed(s); the mill cuts with %s\n\n",
+      threshold, tooth, fpt, critical_feed, seeds,
+      mill_model_file.empty() ? "the configuration's model" : mill_model_file.c_str());
   std::printf("%6s %6s %6s %7s %5s %9s %7s %9s", "rpm", "width", "runout", "depth", "runs",
               "intact_rv", "false", "max_score");
   for (const auto& t : timings) std::printf(" %9s", (t.label + "_rv").c_str());
@@ -238,6 +262,15 @@ int main(int argc, char** argv) {
             model_msg.mutable_cutter()->add_radial_runout_um(r);
           }
         }
+        // The mill that cuts: the configuration's model, or --mill-model's
+        // with this width and runout (the depths stay the configuration's).
+        auto mill_msg = model_msg;
+        if (!mill_model_file.empty()) {
+          mill_msg = plant;
+          mill_msg.mutable_workpiece()->set_width_mm(width);
+          *mill_msg.mutable_cutter()->mutable_radial_runout_um() =
+              model_msg.cutter().radial_runout_um();
+        }
         for (double fraction : fractions) {
           const double depth = fraction * crit;
           uint64_t revs = 0;
@@ -255,7 +288,7 @@ int main(int argc, char** argv) {
             raw.mutable_simulation()->set_seed(static_cast<uint64_t>(seed));
             std::fprintf(stderr, "\r%4.0f rpm, %2.0f mm, runout %2.0f um, %.2f mm, intact    ", rpm,
                          width, runout, depth);
-            const Outcome intact = run_one(raw, verbose);
+            const Outcome intact = run_one(raw, mill_msg, verbose);
             ++runs;
             revs += intact.judged_revs;
             all_chatter_revs += intact.chatter_revs;
@@ -284,7 +317,7 @@ int main(int argc, char** argv) {
               auto* b = broken.mutable_simulation()->add_tooth_breaks();
               b->set_tooth(static_cast<uint32_t>(tooth));
               b->set_at_s(at[k]);
-              const Outcome o = run_one(broken, verbose, at[k]);
+              const Outcome o = run_one(broken, mill_msg, verbose, at[k]);
               ++runs;
               // A break after a chatter (the speed moved) is not this study's case.
               if (o.chatter_s >= 0 && o.chatter_s < at[k]) continue;
