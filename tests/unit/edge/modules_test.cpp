@@ -898,7 +898,8 @@ TEST(ToolBreakageDetector, AFallInProportionToEachWindowsForceIsNoBreak) {
   ToothCut cut;
   const double heavy[4] = {90, 780, 285, 75};
   for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(heavy), -1);
-  cut.t += 1.0;  // a gap: restart
+  cut.t += 1.0;  // a gap: restart; the revolution after it is not compared
+  ASSERT_EQ(cut.revolution(heavy), -1);
   ASSERT_EQ(cut.revolution(heavy), -1);
   const double fifth[4] = {18, 156, 57, 15};
   EXPECT_EQ(cut.revolution(fifth), -1);
