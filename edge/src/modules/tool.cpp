@@ -289,13 +289,16 @@ void ToolBreakageDetector::close_window() noexcept {
 Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
   const ForceSample& f = s.sample;
   // A gap in the samples (N was inactive): the windows of before are stale.
-  // Nor is the revolution after it filled: while the feed was held the tool
-  // sprang back, and its first revolution back cuts what the deflection had
-  // left (edge/README.md, module N).
+  // Nor is the revolution after it filled when N resumes in the cut (a
+  // hold): while the feed was held the tool sprang back, and its first
+  // revolution back cuts what the deflection had left (edge/README.md,
+  // module N). Resuming as the cutter enters the part (the drive's
+  // engagement below kFromAir; NaN: unknown, taken as in the cut), nothing
+  // sprang back, and the first revolution is a tooth's first shock.
   const bool resumed = last_t_s_ >= 0 && f.t_s - last_t_s_ > 1.5 * p_.sample_period_s;
   if (resumed) {
     restart();
-    unfilled_ = 1.0;
+    unfilled_ = s.engagement < kFromAir ? 0.0 : 1.0;
   }
   last_t_s_ = f.t_s;
   feed_now_ = s.feed_per_tooth_cmd_mm;

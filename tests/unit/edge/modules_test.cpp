@@ -874,6 +874,44 @@ TEST(ToolBreakageDetector, TheFirstRevolutionAfterAResumptionIsNotCompared) {
   EXPECT_EQ(cut.s.breakage_window, 0);
 }
 
+// N resuming as the cutter enters the part (the next pass after a
+// repositioning in air) has nothing sprung back to wait for: the first
+// revolution after the gap fills the windows, and a tooth lost in the second
+// is seen within a revolution. Were that first revolution left unfilled, the
+// broken tooth's window would fill with its broken force and never show the
+// fall. Resuming in the cut (a hold), the first revolution is still left.
+TEST(ToolBreakageDetector, ResumingAsTheCutterEntersThePartTheFirstRevolutionIsCompared) {
+  const double level[4] = {300, 300, 300, 300};
+  const double lost[4] = {300, 10, 300, 300};
+  {
+    ToothCut cut;
+    cut.steady();
+    cut.t += 2.0;  // the rapid back to the next pass's start
+    cut.s.engagement = 0.1;
+    ASSERT_EQ(cut.revolution(level), -1);
+    // Window 0 began before N resumed, so only windows 2 and 3 are compared
+    // with window 1: its fall is decided as window 3 closes.
+    ASSERT_EQ(cut.revolution(lost), -1);
+    EXPECT_EQ(cut.revolution(lost), 0);
+    EXPECT_EQ(cut.s.breakage_window, 1);
+    EXPECT_GT(cut.s.breakage_drop, 0.9);
+  }
+  {
+    // A hold in the full cut: the revolution after it (sprung back, heavy)
+    // is not compared with the next.
+    ToothCut cut;
+    cut.s.engagement = 1.0;
+    const double loaded[4] = {600, 180, 10, 60};
+    for (int r = 0; r < 6; ++r) ASSERT_EQ(cut.revolution(loaded), -1);
+    cut.t += 0.5;
+    const double sprung_back[4] = {520, 150, 10, 8};
+    EXPECT_EQ(cut.revolution(sprung_back), -1);
+    const double settled[4] = {90, 26, 10, 54};
+    for (int r = 0; r < 4; ++r) EXPECT_EQ(cut.revolution(settled), -1) << r;
+    EXPECT_FALSE(cut.s.tool_broken);
+  }
+}
+
 // A tooth's arc in the part may straddle two windows: a tooth that breaks
 // late in the first loses a little there (below the threshold) and the rest
 // in the next. That first window's fall is the same tooth's, not the others'

@@ -727,6 +727,45 @@ TEST(SmcTwoPlus, ABrokenToothStopsTheFeedWithinARevolution) {
   EXPECT_EQ(r->activity_mismatches, 0u) << r->first_mismatch;
 }
 
+// The job in two passes of 0.5 mm: N is off between them (the tool goes back
+// in air) and resumes as the cutter enters the second. Nothing sprang back
+// then, so the first revolution in the cut fills N's windows, and a tooth
+// that breaks in the second revolution is seen within a revolution. (Were
+// that first revolution left unfilled, as after a hold in the cut, the broken
+// tooth would fill its own window and never show a fall.)
+TEST(SmcTwoPlus, ABreakAtTheNextPasssEntryIsSeenWithinARevolution) {
+  auto two_passes = [](smc::config::SupervisorConfig& c) {
+    auto* program = c.mutable_program();
+    program->mutable_passes(0)->set_depth_mm(0.5);
+    *program->add_passes() = program->passes(0);
+    program->set_total_depth_mm(1.0);
+  };
+  // When N comes on in the second pass (contact), on the intact cutter.
+  double second_contact_s = -1;
+  RunOptions find;
+  find.on_tick = [&](const EdgeCore& c) {
+    if (second_contact_s < 0 && c.drive_sample().pass_index == 1 &&
+        (c.signals().active & bit(ModuleId::N)) != 0) {
+      second_contact_s = c.drive_sample().force.t_s;
+    }
+  };
+  auto intact = run_paper("smc2_plus.textproto", find, two_passes);
+  ASSERT_TRUE(intact->summary.completed()) << smc::documents::to_json(intact->summary);
+  EXPECT_EQ(intact->summary.tool_broken_s(), -1);
+  ASSERT_GT(second_contact_s, 0);
+  const double revolution_s = 60.0 / 1500;
+  const double break_s = second_contact_s + 1.5 * revolution_s;
+  auto r = run_paper("smc2_plus.textproto", {}, [&](smc::config::SupervisorConfig& c) {
+    two_passes(c);
+    auto* b = c.mutable_simulation()->add_tooth_breaks();
+    b->set_tooth(2);
+    b->set_at_s(break_s);
+  });
+  ASSERT_GE(r->summary.tool_broken_s(), break_s) << "not detected";
+  EXPECT_LE(r->summary.tool_broken_s() - break_s, revolution_s) << "more than one revolution";
+  EXPECT_EQ(r->activity_mismatches, 0u) << r->first_mismatch;
+}
+
 // Everything SMC II+ adds runs on the real-time path without allocating: the
 // speed change (program update, drive command) and the breakage stop.
 // SMC II+ runs carry the identification segment too. F_ref ramps, so that

@@ -353,7 +353,8 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // threshold's share of the mean window, beyond the common change and by
 // half that in itself) within a revolution before or after the window's
 // last fall. A gap in the samples (N was inactive) restarts the windows a
-// revolution after N resumes. f is latched until N is reset.
+// revolution after N resumes (at once when it resumes as the cutter enters
+// the part: nothing sprang back). f is latched until N is reset.
 class ToolBreakageDetector final : public Module {
  public:
   ToolBreakageDetector() noexcept : Module(ModuleId::N) {}
@@ -435,6 +436,7 @@ class ToolBreakageDetector final : public Module {
   static constexpr double kConfirmShare = 0.5;  // x threshold x mean window: the chip taken
   static constexpr int kJudgeFrom = 8;          // judged from 1/kJudgeFrom of a window on
   static constexpr int kSuspectFrom = 4;        // a suspect from 1/kSuspectFrom of a window on
+  static constexpr double kFromAir = 0.25;      // resuming below this engagement: entering
   double feed_before_[kMaxTeeth] = {};          // feed command when each window last closed
   double feed_before2_[kMaxTeeth] = {};         // and the revolution before
   double feed_now_ = 0;
