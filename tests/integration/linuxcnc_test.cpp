@@ -294,6 +294,27 @@ std::vector<Watch> read_watch(const std::string& path) {
   return rows;
 }
 
+// The position of the cutter's axis (mm) in the last revolution of a run's
+// revolutions.csv in contact with F_Y above `force_n`: where its cut ended.
+double last_cutting_x(const std::string& path, double force_n) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in,
+               line);  // header: t_s,revolution,pass_index,pass_count,x_mm,depth_mm,f_y_peak_n,...
+  double last = -1;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::size_t from = 0;
+    for (std::size_t at; (at = line.find(',', from)) != std::string::npos; from = at + 1) {
+      f.push_back(line.substr(from, at - from));
+    }
+    f.push_back(line.substr(from));
+    if (f.size() < 16) continue;
+    if (std::atof(f[6].c_str()) > force_n && f[15] == "1") last = std::atof(f[4].c_str());
+  }
+  return last;
+}
+
 double monotonic_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -960,4 +981,13 @@ TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   const double extra = lc.cycle_time_s() - sim.cycle_time_s();
   EXPECT_GE(extra, 0.0);
   EXPECT_LE(extra, 10.0);
+  // The exit: the teeth cut until their tips pass the part's end, on the
+  // dynamometer as on the simulated mill (it used to read the part's last
+  // bin as cut once the leading edge reached it, and every cut ended the
+  // cutter's radius early, at X125 of 150).
+  const double lc_end = last_cutting_x((dir_ / "lcnc" / "revolutions.csv").string(), 50);
+  const double sim_end = last_cutting_x(sim_dir + "/revolutions.csv", 50);
+  std::printf("last revolution with F_Y above 50 N: X%.2f / X%.2f\n", lc_end, sim_end);
+  EXPECT_GT(sim_end, 130.0);
+  EXPECT_NEAR(lc_end, sim_end, 2.0);
 }

@@ -113,7 +113,10 @@ struct Dyno {
   bool have_x = false;
   bool last_new_part = false;
   bool clear_of_part = true;  // the tool was above the top face since the blank was mounted
-  int broken_tooth = 0;       // the last tooth broken by the break-tooth pin
+  // The material's level (mm removed below the top face) the leading edge
+  // met last inside the part: read while the cutter leaves it.
+  double exit_level = 0;
+  int broken_tooth = 0;  // the last tooth broken by the break-tooth pin
   long period_ns = 0;
 
   Dyno(mc::MillingModel m, const mc::SimulatorOptions& o) : model(std::move(m)), sim(model, o) {}
@@ -128,6 +131,7 @@ struct Dyno {
   }
   void fresh_blank() noexcept {
     std::fill(removed.begin(), removed.end(), 0.0);
+    exit_level = 0;
     sim.reset();
     lp_x.reset();
     lp_y.reset();
@@ -218,13 +222,23 @@ void update(void* /*arg*/, long period) {
   }
   d.last_x = x;
   d.have_x = std::isfinite(x);
-  // The chip depth where the leading edge meets material.
-  const double edge = std::min(d.length(), x + d.radius());
+  // The chip depth where the leading edge meets material. Once the leading
+  // edge is past the part's end no new material meets it, but the teeth
+  // still cut the material left ahead of them until their tips pass the
+  // end (the simulator ends the cut there, as the simulated mill's): the
+  // level the leading edge met last holds. (The bins behind the leading
+  // edge are marked cut below, the last one too, which read as no material
+  // at all and ended every exit as the leading edge passed the part's end,
+  // the cutter's radius early.)
+  const double lead = x + d.radius();
+  double level = d.exit_level;
+  if (!(lead >= d.length())) {
+    level = d.removed_at(std::max(0.0, lead));
+    d.exit_level = level;
+  }
   const double tip = -z;  // below the top face
   if (!d.clear_of_part && std::isfinite(tip) && tip <= 0) d.clear_of_part = true;
-  in.depth_mm = std::isfinite(tip) && d.clear_of_part
-                    ? std::max(0.0, tip - d.removed_at(std::max(0.0, edge)))
-                    : 0;
+  in.depth_mm = std::isfinite(tip) && d.clear_of_part ? std::max(0.0, tip - level) : 0;
   mc::Sample smp;
   status |= d.sim.step(in, smp, {d.trace_x.data(), d.trace_y.data(), d.trace_z.data()});
   double fx = 0, fy = 0, fz = 0;
@@ -242,7 +256,6 @@ void update(void* /*arg*/, long period) {
   // Z: every bin [i, i+1) x bin_mm wholly behind the leading edge (the bin
   // under the edge is where the next chip's depth is read).
   if (d.clear_of_part && std::isfinite(tip) && tip > 0 && std::isfinite(x)) {
-    const double lead = x + d.radius();
     auto i = static_cast<std::size_t>(std::max(0.0, x - d.radius()) / d.bin_mm);
     for (; i < d.removed.size() && static_cast<double>(i + 1) * d.bin_mm <= lead; ++i) {
       d.removed[i] = std::max(d.removed[i], tip);
