@@ -245,6 +245,31 @@ void ToolBreakageDetector::judge_pending(Signals& s) noexcept {
   s.breakage_drop = drop;
 }
 
+void ToolBreakageDetector::judge_exit(Signals& s, int j) noexcept {
+  // Leaving the part (the drive's engagement below its most) every window
+  // falls, later windows by more or less than earlier ones as the part's
+  // end crosses the cutter: the median of a revolution's changes mixes
+  // moments of that ramp. A suspect's fall against its neighbours in time
+  // (the window before it and the one just closed after it) measures the
+  // lost chip alone; beyond the threshold's share of the mean window it is
+  // a break, with no taker needed (at a full slot's exit the taker falls
+  // too: edge/README.md, module N).
+  const int n = p_.teeth;
+  if (s.tool_broken || n < 3 || !(s.engagement < most_engaged_ - 1e-9)) return;
+  const int m = (j + n - 1) % n, b = (j + n - 2) % n;
+  if (!compared_[b] || !compared_[m] || !compared_[j] || suspect_drop_[m] <= 0) return;
+  double total = 0;
+  for (int k = 0; k < n; ++k) total += previous_[k];
+  const double window_mean = total / n;
+  if (window_mean < kFloorShare * p_.contact_threshold_n) return;
+  const double drop = (0.5 * (change_[b] + change_[j]) - change_[m]) / window_mean;
+  largest_score_ = std::max(largest_score_, drop);
+  if (drop <= p_.breakage_threshold) return;
+  s.tool_broken = true;
+  s.breakage_window = m;
+  s.breakage_drop = drop;
+}
+
 double ToolBreakageDetector::earlier_sum(int j, double x) const noexcept {
   // C(m): the sum of the window's first m samples one revolution ago, linear
   // between whole samples; before its first sample, the sample before it
@@ -314,8 +339,10 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
   const int w = std::min(n - 1, static_cast<int>(phase * n));
   if (w != window_) {
     if (window_ >= 0 && count_ > 0 && !partial_) {
+      const int closed = window_;
       close_window();
       if (pending_window_ >= 0) judge_pending(s);
+      judge_exit(s, closed);
     }
     partial_ = window_ < 0 || unfilled_ > 1e-9;
     window_ = w;

@@ -766,6 +766,63 @@ TEST(ToolBreakageDetector, LeavingThePartNoTrendIsTakenOff) {
   EXPECT_EQ(cut.s.breakage_window, 3);
 }
 
+// Leaving the part every window falls, later ones by more or less than
+// earlier ones as the part's end crosses the cutter, and at a full slot's
+// exit the tooth that takes a lost chip falls too (the study's 1100 rpm,
+// 50 mm, 0.29 mm exit: the taker fell 13 N against a common 64 N). A window
+// that falls beyond its neighbours in time (the window before it and the
+// one after) by the threshold's share of the mean window is a break then,
+// decided as the window after it closes; a smooth ramp is none.
+TEST(ToolBreakageDetector, LeavingThePartAFallBeyondItsNeighboursInTimeIsABreak) {
+  const double ramp_a[4] = {290, 270, 250, 230};  // falls of 10, 30, 50, 70 N
+  const double ramp_b[4] = {200, 180, 160, 140};  // 90 N each
+  const double ramp_c[4] = {120, 105, 90, 75};    // 80, 75, 70, 65 N
+  const double ramp_d[4] = {60, 50, 40, 30};
+  auto exit = [&](ToothCut& cut) {
+    cut.s.engagement = 1.0;
+    cut.steady();
+    cut.s.engagement = 0.9;
+    EXPECT_EQ(cut.revolution(ramp_a), -1);
+    cut.s.engagement = 0.8;
+    EXPECT_EQ(cut.revolution(ramp_b), -1);
+    cut.s.engagement = 0.7;
+  };
+  {
+    ToothCut cut;
+    exit(cut);
+    EXPECT_EQ(cut.revolution(ramp_c), -1);
+    cut.s.engagement = 0.6;
+    EXPECT_EQ(cut.revolution(ramp_d), -1);
+    EXPECT_FALSE(cut.s.tool_broken) << "a ramp";
+  }
+  {
+    // A steeper ramp: window 3 falls 190 N where the revolution's median
+    // fall is 30 N (a suspect), but between neighbours falling 110 and
+    // 210 N.
+    ToothCut cut;
+    cut.s.engagement = 1.0;
+    cut.steady();
+    cut.s.engagement = 0.8;
+    const double steep[4] = {290, 250, 190, 110};
+    EXPECT_EQ(cut.revolution(steep), -1);
+    cut.s.engagement = 0.6;
+    const double after[4] = {80, 60, 45, 35};
+    EXPECT_EQ(cut.revolution(after), -1);
+    EXPECT_FALSE(cut.s.tool_broken) << "a steep ramp";
+  }
+  {
+    // Window 1's tooth breaks: it falls 145 N between neighbours falling 80
+    // and 70 N; the tooth that takes its chip (window 3) still falls 35 N.
+    ToothCut cut;
+    exit(cut);
+    const double broken[4] = {120, 35, 90, 105};
+    EXPECT_EQ(cut.revolution(broken), 3 * cut.p.samples_per_revolution / 4)
+        << "decided as window 2 closes";
+    EXPECT_EQ(cut.s.breakage_window, 1);
+    EXPECT_GT(cut.s.breakage_drop, cut.p.breakage_threshold);
+  }
+}
+
 // A suspect lasts a revolution from its window's last fall, not its first:
 // at a full slot's exit the part's end makes a window a suspect, and the
 // tooth that breaks in the next revolution falls in it again (the study's
@@ -773,13 +830,17 @@ TEST(ToolBreakageDetector, LeavingThePartNoTrendIsTakenOff) {
 // run out).
 TEST(ToolBreakageDetector, ASuspectThatFallsAgainIsKeptFromItsLastFall) {
   ToothCut cut;
-  // The part's end: every window falls 20 N, window 3 120 N. The others
-  // hold; window 3's tooth breaks and it falls again. Window 0 takes its
-  // chip, more than a revolution after the first fall.
+  // The part's end: every window falls 20 N, window 3 120 N, and window 0
+  // after it 100 N (the part's end crosses windows 3 and 0: no lone fall).
+  // Window 3's tooth breaks and it falls again. Window 0 takes its chip,
+  // more than a revolution after the first fall, and the suspect is
+  // confirmed as it rises, before it closes.
   const double edge[4] = {280, 280, 280, 180};
-  const double broken[4] = {280, 280, 280, 30};
-  const double taken[4] = {400, 280, 280, 30};
-  EXPECT_GE(cut.exit_then_break(edge, broken, taken), 0) << "the second fall, taken up";
+  const double broken[4] = {180, 280, 280, 30};
+  const double taken[4] = {300, 280, 280, 30};
+  const int at = cut.exit_then_break(edge, broken, taken);
+  EXPECT_GE(at, 0) << "the second fall, taken up";
+  EXPECT_LT(at, cut.p.samples_per_revolution / 4) << "by the taker's rise";
   EXPECT_EQ(cut.s.breakage_window, 3);
 }
 

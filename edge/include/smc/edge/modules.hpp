@@ -352,8 +352,11 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // window within the cut's arc has taken the chip (risen by half the
 // threshold's share of the mean window, beyond the common change and by
 // half that in itself) within a revolution before or after the window's
-// last fall. A gap in the samples (N was inactive) restarts the windows a
-// revolution after N resumes (at once when it resumes as the cutter enters
+// last fall; leaving the part, also when its fall beyond the mean of its
+// neighbours' in time (the windows before and after it) exceeds the
+// threshold's share of the mean window, as the window after it closes
+// (every window falls through an exit, the taker too). A gap in the samples (N was inactive)
+// restarts the windows a revolution after N resumes (at once when it resumes as the cutter enters
 // the part: nothing sprang back). f is latched until N is reset.
 class ToolBreakageDetector final : public Module {
  public:
@@ -403,6 +406,7 @@ class ToolBreakageDetector final : public Module {
   // of its own mean the revolution before.
   double relative_common(int exclude) const noexcept;
   void judge_pending(Signals& s) noexcept;
+  void judge_exit(Signals& s, int closed) noexcept;
   // Window a can hold the chip a broken tooth in window b left: another
   // window within reach_ of it, either way round (the next tooth cuts it a
   // window later, and its arc spans reach_ windows; the spindle may turn
