@@ -299,8 +299,8 @@ std::vector<Watch> read_watch(const std::string& path) {
 double last_cutting_x(const std::string& path, double force_n) {
   std::ifstream in(path);
   std::string line;
-  std::getline(in,
-               line);  // header: t_s,revolution,pass_index,pass_count,x_mm,depth_mm,f_y_peak_n,...
+  // Header: t_s,revolution,pass_index,pass_count,x_mm,depth_mm,f_y_peak_n,...,contact (16th).
+  std::getline(in, line);
   double last = -1;
   while (std::getline(in, line)) {
     std::vector<std::string> f;

@@ -85,6 +85,12 @@ bool ToolBreakageDetector::adjacent(int a, int b) const noexcept {
   return std::min(d, n - d) <= reach_;
 }
 
+double ToolBreakageDetector::mean_window() const noexcept {
+  double total = 0;
+  for (int k = 0; k < p_.teeth; ++k) total += previous_[k];
+  return total / p_.teeth;
+}
+
 double ToolBreakageDetector::relative_common(int exclude) const noexcept {
   double v[kMaxTeeth];
   int count = 0;
@@ -100,9 +106,7 @@ void ToolBreakageDetector::judge(Signals& s, double change, double earlier) noex
   // Settling: the windows have been compared for fewer than
   // kSettleRevolutions (the controller's entry transient moves them).
   const bool settling = closed_ < kSettleRevolutions * n;
-  double total = 0;
-  for (int k = 0; k < n; ++k) total += previous_[k];
-  const double window_mean = total / n;
+  const double window_mean = mean_window();
   if (window_mean < kFloorShare * p_.contact_threshold_n) return;  // too little force to judge
   // The common change: the median of the windows' last changes (of those
   // compared since the (re)start: the others have none yet).
@@ -151,7 +155,7 @@ void ToolBreakageDetector::judge(Signals& s, double change, double earlier) noex
   // another window must take up (below), and at a full slot's exit the
   // window the part's end crossed the revolution before may be the one
   // whose tooth breaks next; its trend would hide the break.
-  const bool leaving = s.engagement < most_engaged_ - 1e-9;
+  const bool leaving = leaving_part(s);
   const double trend = leaving ? 0.0 : std::max(0.0, excess_[window_]);
   const double drop = (excess - trend) / window_mean;
   if (excess - trend < kSpreadFactor * spread) return;
@@ -255,12 +259,10 @@ void ToolBreakageDetector::judge_exit(Signals& s, int j) noexcept {
   // a break, with no taker needed (at a full slot's exit the taker falls
   // too: edge/README.md, module N).
   const int n = p_.teeth;
-  if (s.tool_broken || n < 3 || !(s.engagement < most_engaged_ - 1e-9)) return;
+  if (s.tool_broken || n < 3 || !leaving_part(s)) return;
   const int m = (j + n - 1) % n, b = (j + n - 2) % n;
   if (!compared_[b] || !compared_[m] || !compared_[j] || suspect_drop_[m] <= 0) return;
-  double total = 0;
-  for (int k = 0; k < n; ++k) total += previous_[k];
-  const double window_mean = total / n;
+  const double window_mean = mean_window();
   if (window_mean < kFloorShare * p_.contact_threshold_n) return;
   const double drop = (0.5 * (change_[b] + change_[j]) - change_[m]) / window_mean;
   largest_score_ = std::max(largest_score_, drop);

@@ -355,9 +355,10 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // last fall; leaving the part, also when its fall beyond the mean of its
 // neighbours' in time (the windows before and after it) exceeds the
 // threshold's share of the mean window, as the window after it closes
-// (every window falls through an exit, the taker too). A gap in the samples (N was inactive)
-// restarts the windows a revolution after N resumes (at once when it resumes as the cutter enters
-// the part: nothing sprang back). f is latched until N is reset.
+// (every window falls through an exit, the taker too). A gap in the
+// samples (N was inactive) restarts the windows a revolution after N
+// resumes (at once when it resumes as the cutter enters the part: nothing
+// sprang back). f is latched until N is reset.
 class ToolBreakageDetector final : public Module {
  public:
   ToolBreakageDetector() noexcept : Module(ModuleId::N) {}
@@ -407,6 +408,11 @@ class ToolBreakageDetector final : public Module {
   double relative_common(int exclude) const noexcept;
   void judge_pending(Signals& s) noexcept;
   void judge_exit(Signals& s, int closed) noexcept;
+  // The windows' mean force one revolution ago (the scores' scale).
+  double mean_window() const noexcept;
+  // The drive's engagement is below the most it reported since the
+  // (re)start: the cutter is leaving the part (NaN: not known, not leaving).
+  bool leaving_part(const Signals& s) const noexcept { return s.engagement < most_engaged_ - 1e-9; }
   // Window a can hold the chip a broken tooth in window b left: another
   // window within reach_ of it, either way round (the next tooth cuts it a
   // window later, and its arc spans reach_ windows; the spindle may turn
