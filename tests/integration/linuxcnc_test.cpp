@@ -984,10 +984,13 @@ TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   // The exit: the teeth cut until their tips pass the part's end, on the
   // dynamometer as on the simulated mill (it used to read the part's last
   // bin as cut once the leading edge reached it, and every cut ended the
-  // cutter's radius early, at X125 of 150).
+  // cutter's radius early, at X125 of 150). Within a revolution at the
+  // machine's highest feed (36 mm/s at 1500 rpm: 1.44 mm) twice over: the
+  // controller raises the feed as the force falls, and LinuxCNC's run
+  // differs from run to run (X141.0 and X142.1 against X140.9 in two runs).
   const double lc_end = last_cutting_x((dir_ / "lcnc" / "revolutions.csv").string(), 50);
   const double sim_end = last_cutting_x(sim_dir + "/revolutions.csv", 50);
   std::printf("last revolution with F_Y above 50 N: X%.2f / X%.2f\n", lc_end, sim_end);
   EXPECT_GT(sim_end, 130.0);
-  EXPECT_NEAR(lc_end, sim_end, 2.0);
+  EXPECT_NEAR(lc_end, sim_end, 2 * 36.0 * 60.0 / 1500);
 }

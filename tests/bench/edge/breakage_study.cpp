@@ -27,10 +27,11 @@
 // Breaks N cannot see are counted apart too: of a tooth whose chip (runout
 // kinematics, at the feed of the moment) is below the threshold's share of
 // the mean chip, or while the mean window force is below N's floor.
-// --mill-model FILE: the simulated mill cuts with that model (e.g.
-// cell/models/paper_face_mill_mismatched.textproto: a softer tool, harder
-// material), with the study's width and runout; the critical depth and the
-// depths stay the configuration's, as a cell would plan them.
+// --mill-model FILE: the simulated mill cuts with that model's structure and
+// cutting law (e.g. cell/models/paper_face_mill_mismatched.textproto: a
+// softer tool, harder material) and the study's cutter and part (runout,
+// width); the critical depth and the depths stay the configuration's, as a
+// cell would plan them.
 // Progress on stderr; SMC_STUDY_TRACE=T prints the windows around time T.
 
 #include <algorithm>
@@ -263,14 +264,11 @@ int main(int argc, char** argv) {
           }
         }
         // The mill that cuts: the configuration's model, or --mill-model's
-        // with this width and runout (the depths stay the configuration's).
+        // structure and cutting law with this cutter (runout) and part
+        // (width), as `smc-edge simulate --mill-model` takes it; the depths
+        // stay the configuration's.
         auto mill_msg = model_msg;
-        if (!mill_model_file.empty()) {
-          mill_msg = plant;
-          mill_msg.mutable_workpiece()->set_width_mm(width);
-          *mill_msg.mutable_cutter()->mutable_radial_runout_um() =
-              model_msg.cutter().radial_runout_um();
-        }
+        if (!mill_model_file.empty()) use_plant_model(mill_msg, plant);
         for (double fraction : fractions) {
           const double depth = fraction * crit;
           uint64_t revs = 0;

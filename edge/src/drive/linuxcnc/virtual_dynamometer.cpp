@@ -231,14 +231,10 @@ void update(void* /*arg*/, long period) {
   // at all and ended every exit as the leading edge passed the part's end,
   // the cutter's radius early.)
   const double lead = x + d.radius();
-  double level = d.exit_level;
-  if (!(lead >= d.length())) {
-    level = d.removed_at(std::max(0.0, lead));
-    d.exit_level = level;
-  }
+  if (!(lead >= d.length())) d.exit_level = d.removed_at(std::max(0.0, lead));
   const double tip = -z;  // below the top face
   if (!d.clear_of_part && std::isfinite(tip) && tip <= 0) d.clear_of_part = true;
-  in.depth_mm = std::isfinite(tip) && d.clear_of_part ? std::max(0.0, tip - level) : 0;
+  in.depth_mm = std::isfinite(tip) && d.clear_of_part ? std::max(0.0, tip - d.exit_level) : 0;
   mc::Sample smp;
   status |= d.sim.step(in, smp, {d.trace_x.data(), d.trace_y.data(), d.trace_z.data()});
   double fx = 0, fy = 0, fz = 0;
