@@ -108,6 +108,10 @@ void ToolBreakageDetector::judge(Signals& s, double change, double earlier) noex
   const bool settling = closed_ < kSettleRevolutions * n;
   const double window_mean = mean_window();
   if (window_mean < kFloorShare * p_.contact_threshold_n) return;  // too little force to judge
+  // With as many samples as it had a revolution before, this window is
+  // whole: the window before it can be judged against its neighbours in
+  // time now, a sample before this one closes.
+  if (count_ == previous_count_[window_]) judge_exit(s, window_, change, earlier + change);
   // The common change: the median of the windows' last changes (of those
   // compared since the (re)start: the others have none yet).
   int compared = 0;
@@ -249,27 +253,46 @@ void ToolBreakageDetector::judge_pending(Signals& s) noexcept {
   s.breakage_drop = drop;
 }
 
-void ToolBreakageDetector::judge_exit(Signals& s, int j) noexcept {
+void ToolBreakageDetector::judge_exit(Signals& s, int j, double change_j, double mean_j) noexcept {
   // Leaving the part (the drive's engagement below its most) every window
   // falls, later windows by more or less than earlier ones as the part's
   // end crosses the cutter: the median of a revolution's changes mixes
-  // moments of that ramp. A suspect's fall against its neighbours in time
-  // (the window before it and the one just closed after it) measures the
-  // lost chip alone; beyond the threshold's share of the mean window it is
-  // a break, with no taker needed (at a full slot's exit the taker falls
-  // too: edge/README.md, module N).
+  // moments of that ramp, and may hide a lost chip that a window's
+  // neighbours in time (the window before it and the one after it) do not.
+  // Against them, every window is judged with the last sample of the window
+  // after it: a fall beyond them by the threshold's share of the mean
+  // window is the lost chip, a rise beyond them the tooth that took it (at
+  // a full slot's exit the taker falls too, but less than its neighbours:
+  // edge/README.md, module N). No taker is needed.
   const int n = p_.teeth;
   if (s.tool_broken || n < 3 || !leaving_part(s)) return;
   const int m = (j + n - 1) % n, b = (j + n - 2) % n;
-  if (!compared_[b] || !compared_[m] || !compared_[j] || suspect_drop_[m] <= 0) return;
-  const double window_mean = mean_window();
+  if (!compared_[b] || !compared_[m]) return;
+  // The windows' latest means, j's as it is now.
+  const double window_mean = mean_window() + (mean_j - previous_[j]) / n;
   if (window_mean < kFloorShare * p_.contact_threshold_n) return;
-  const double drop = (0.5 * (change_[b] + change_[j]) - change_[m]) / window_mean;
-  largest_score_ = std::max(largest_score_, drop);
-  if (drop <= p_.breakage_threshold) return;
+  const double fall = (0.5 * (change_[b] + change_j) - change_[m]) / window_mean;
+  const double score = std::fabs(fall);
+  largest_score_ = std::max(largest_score_, score);
+  if (score <= p_.breakage_threshold) return;
+  // A rise: the chip came from a window within the cut's arc of it, the
+  // one that fell most.
+  int lost = m;
+  if (fall < 0) {
+    lost = -1;
+    double lost_change = 0;
+    for (int k = 0; k < n; ++k) {
+      const double c = k == j ? change_j : change_[k];
+      if (adjacent(k, m) && (compared_[k] || k == j) && (lost < 0 || c < lost_change)) {
+        lost = k;
+        lost_change = c;
+      }
+    }
+    if (lost < 0) lost = b;
+  }
   s.tool_broken = true;
-  s.breakage_window = m;
-  s.breakage_drop = drop;
+  s.breakage_window = lost;
+  s.breakage_drop = score;
 }
 
 double ToolBreakageDetector::earlier_sum(int j, double x) const noexcept {
@@ -344,7 +367,7 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
       const int closed = window_;
       close_window();
       if (pending_window_ >= 0) judge_pending(s);
-      judge_exit(s, closed);
+      if (compared_[closed]) judge_exit(s, closed, change_[closed], previous_[closed]);
     }
     partial_ = window_ < 0 || unfilled_ > 1e-9;
     window_ = w;

@@ -22,7 +22,10 @@
 // contact with a trailing r (--timings 0r,1r,2r,3r: the moments N's
 // comparison with the revolution before cannot cover; edge/README.md, "What
 // N does not see"). The delay is from the break to N's
-// detection, in revolutions. Revolutions after E saw chatter are left out
+// detection, in revolutions. "Within a revolution" is on the sample grid:
+// by the first sample at which a revolution has passed since the break (at
+// 1100 rpm a revolution is 109.1 samples, and the 110th is the first N can
+// decide on). Revolutions after E saw chatter are left out
 // of the intact count and reported apart, as are breaks after a chatter.
 // Breaks N cannot see are counted apart too: of a tooth whose chip (runout
 // kinematics, at the feed of the moment) is below the threshold's share of
@@ -229,6 +232,7 @@ int main(int argc, char** argv) {
   const double fpt = 0.1;
   const double threshold = edge_config_from_proto(base).params.breakage_threshold;
   const double floor_n = ToolBreakageDetector::force_floor_n(edge_config_from_proto(base).params);
+  const double dt = edge_config_from_proto(base).params.sample_period_s;
   std::printf(
       "module N: threshold %.2f (a tooth window's fall beyond the common change, share of the "
       "mean window); tooth %d loses its edge (with runout, tooth 1 stands out furthest); "
@@ -363,7 +367,17 @@ int main(int argc, char** argv) {
               const double d = (o.detected_s - at[k]) * rpm / 60.0;
               delay[k] = std::max(delay[k], d);
               worst_delay = std::max(worst_delay, d);
-              if (d <= 1.0) ++all_within;
+              // The first sample at which a revolution has passed (a part
+              // of a sample's float error is no delay).
+              const double by_s = dt * std::ceil((at[k] + 60.0 / rpm) / dt - 1e-6);
+              if (o.detected_s <= by_s + 1e-9) {
+                ++all_within;
+              } else if (verbose) {
+                std::fprintf(stderr,
+                             "\n  LATE: break at %.5f s, a revolution passed at %.4f s, detected "
+                             "at %.4f s\n",
+                             at[k], by_s, o.detected_s);
+              }
             }
           }
           all_revs += revs;

@@ -352,9 +352,10 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // window within the cut's arc has taken the chip (risen by half the
 // threshold's share of the mean window, beyond the common change and by
 // half that in itself) within a revolution before or after the window's
-// last fall; leaving the part, also when its fall beyond the mean of its
-// neighbours' in time (the windows before and after it) exceeds the
-// threshold's share of the mean window, as the window after it closes
+// last fall. Leaving the part, every window is also judged against its
+// neighbours in time (the windows before and after it) as the window after
+// it closes: a fall beyond their mean change by more than the threshold's
+// share of the mean window is a lost chip, a rise beyond it a taken one
 // (every window falls through an exit, the taker too). A gap in the
 // samples (N was inactive) restarts the windows a revolution after N
 // resumes (at once when it resumes as the cutter enters the part: nothing
@@ -407,7 +408,10 @@ class ToolBreakageDetector final : public Module {
   // of its own mean the revolution before.
   double relative_common(int exclude) const noexcept;
   void judge_pending(Signals& s) noexcept;
-  void judge_exit(Signals& s, int closed) noexcept;
+  // Leaving the part: the window before `j` against its neighbours in time,
+  // j's change and mean being change_j and mean_j (j whole, or just closed;
+  // compared).
+  void judge_exit(Signals& s, int j, double change_j, double mean_j) noexcept;
   // The windows' mean force one revolution ago (the scores' scale).
   double mean_window() const noexcept;
   // The drive's engagement is below the most it reported since the
