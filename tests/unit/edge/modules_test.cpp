@@ -566,6 +566,20 @@ struct ToothCut {
     const double level[4] = {300, 300, 300, 300};
     for (int r = 0; r < 6; ++r) ASSERT_EQ(revolution(level), -1);
   }
+  // Leaving the part after a steady cut at `level`: the revolutions of
+  // `ramp`, at engagements 0.9, 0.8, ..., none seen; the engagement is then
+  // 0.1 lower again.
+  template <size_t N>
+  void leave(double level, const double (&ramp)[N][4]) {
+    s.engagement = 1.0;
+    const double steady_level[4] = {level, level, level, level};
+    for (int r = 0; r < 6; ++r) ASSERT_EQ(revolution(steady_level), -1);
+    for (const auto& l : ramp) {
+      s.engagement -= 0.1;
+      EXPECT_EQ(revolution(l), -1);
+    }
+    s.engagement -= 0.1;
+  }
   // Leaving the part (the drive's engagement 1, then 0.8 and 0.7): the
   // part's end (`edge`), then a tooth breaking (`broken`), each a suspect
   // with no taker yet, then another window taking its chip (`taken`);
@@ -579,6 +593,16 @@ struct ToothCut {
     s.engagement = 0.7;
     EXPECT_EQ(revolution(broken), -1) << "a suspect, no taker yet";
     return revolution(taken);
+  }
+  // The same, and the break is window 3's, confirmed early in the taker's
+  // window by its rise (before the neighbours in time could decide, with
+  // its last sample).
+  void expect_taken_early(const double (&edge)[4], const double (&broken)[4],
+                          const double (&taken)[4]) {
+    const int at = exit_then_break(edge, broken, taken);
+    EXPECT_GE(at, 0) << "the fall, taken up";
+    EXPECT_LT(at, p.samples_per_revolution / 8) << "by the taker's rise";
+    EXPECT_EQ(s.breakage_window, 3);
   }
   // A narrow cut: an arc of 60 degrees, within one window of 4 (the taker of
   // a lost chip is a neighbouring window).
@@ -764,10 +788,7 @@ TEST(ToolBreakageDetector, LeavingThePartNoTrendIsTakenOff) {
   const double edge[4] = {290, 290, 230, 200};
   const double broken[4] = {230, 250, 170, 60};
   const double taken[4] = {400, 250, 170, 55};
-  const int at = cut.exit_then_break(edge, broken, taken);
-  EXPECT_GE(at, 0) << "the whole fall, taken up";
-  EXPECT_LT(at, cut.p.samples_per_revolution / 8) << "by the taker's rise";
-  EXPECT_EQ(cut.s.breakage_window, 3);
+  cut.expect_taken_early(edge, broken, taken);
 }
 
 // Leaving the part every window falls, later ones by more or less than
@@ -780,19 +801,13 @@ TEST(ToolBreakageDetector, LeavingThePartNoTrendIsTakenOff) {
 // window before it stands out against it by half its fall); a smooth ramp
 // is none.
 TEST(ToolBreakageDetector, LeavingThePartAFallBeyondItsNeighboursInTimeIsABreak) {
-  const double ramp_a[4] = {290, 270, 250, 230};  // falls of 10, 30, 50, 70 N
-  const double ramp_b[4] = {200, 180, 160, 140};  // 90 N each
-  const double ramp_c[4] = {120, 105, 90, 75};    // 80, 75, 70, 65 N
-  const double ramp_d[4] = {60, 50, 40, 30};
-  auto exit = [&](ToothCut& cut) {
-    cut.s.engagement = 1.0;
-    cut.steady();
-    cut.s.engagement = 0.9;
-    EXPECT_EQ(cut.revolution(ramp_a), -1);
-    cut.s.engagement = 0.8;
-    EXPECT_EQ(cut.revolution(ramp_b), -1);
-    cut.s.engagement = 0.7;
+  const double ramp[2][4] = {
+      {290, 270, 250, 230},  // falls of 10, 30, 50, 70 N
+      {200, 180, 160, 140},  // 90 N each
   };
+  const double ramp_c[4] = {120, 105, 90, 75};  // 80, 75, 70, 65 N
+  const double ramp_d[4] = {60, 50, 40, 30};
+  auto exit = [&](ToothCut& cut) { cut.leave(300, ramp); };
   {
     ToothCut cut;
     exit(cut);
@@ -840,22 +855,12 @@ TEST(ToolBreakageDetector, LeavingThePartAFallBeyondItsNeighboursInTimeIsABreak)
 // over two revolutions, 0.18 and 0.16 of a mean window; its taker rose
 // 0.29 beyond its neighbours).
 TEST(ToolBreakageDetector, LeavingThePartEveryWindowIsJudgedAgainstItsNeighboursInTime) {
-  const double first[4] = {140, 125, 115, 110};  // falls of 20, 35, 45, 50 N
-  const double intact[4] = {100, 100, 97, 94};   // 40, 25, 18, 16 N
-  const double after[4] = {85, 85, 85, 84};      // 15, 15, 12, 10 N
-  auto exit = [&first](ToothCut& cut, const double(&second)[4]) {
-    cut.s.engagement = 1.0;
-    const double level[4] = {160, 160, 160, 160};
-    for (int r = 0; r < 6; ++r) EXPECT_EQ(cut.revolution(level), -1);
-    cut.s.engagement = 0.8;
-    EXPECT_EQ(cut.revolution(first), -1);
-    cut.s.engagement = 0.7;
-    EXPECT_EQ(cut.revolution(second), -1);
-    cut.s.engagement = 0.6;
-  };
+  // From 160 N: falls of 20, 35, 45 and 50 N, then 40, 25, 18 and 16 N.
+  const double intact[2][4] = {{140, 125, 115, 110}, {100, 100, 97, 94}};
+  const double after[4] = {85, 85, 85, 84};  // 15, 15, 12, 10 N
   {
     ToothCut cut;
-    exit(cut, intact);
+    cut.leave(160, intact);
     EXPECT_EQ(cut.revolution(after), -1);
     const double later[4] = {72, 71, 72, 73};
     EXPECT_EQ(cut.revolution(later), -1);
@@ -864,8 +869,8 @@ TEST(ToolBreakageDetector, LeavingThePartEveryWindowIsJudgedAgainstItsNeighbours
   {
     // Window 3's tooth breaks: it falls 50 N, not 16.
     ToothCut cut;
-    const double broken[4] = {100, 100, 97, 60};
-    exit(cut, broken);
+    const double broken[2][4] = {{140, 125, 115, 110}, {100, 100, 97, 60}};
+    cut.leave(160, broken);
     EXPECT_EQ(cut.revolution(after), cut.p.samples_per_revolution / 4 - 1)
         << "decided with window 0's last sample";
     EXPECT_EQ(cut.s.breakage_window, 3);
@@ -876,8 +881,8 @@ TEST(ToolBreakageDetector, LeavingThePartEveryWindowIsJudgedAgainstItsNeighbours
     // mean window beyond its neighbours; window 1 takes its chip next
     // revolution, rising 15 N while its neighbours fall 15 and 14.
     ToothCut cut;
-    const double broken[4] = {100, 100, 97, 74};
-    exit(cut, broken);
+    const double broken[2][4] = {{140, 125, 115, 110}, {100, 100, 97, 74}};
+    cut.leave(160, broken);
     const double taken[4] = {85, 115, 83, 74};
     EXPECT_EQ(cut.revolution(taken), 3 * cut.p.samples_per_revolution / 4 - 1)
         << "decided with window 2's last sample";
@@ -903,10 +908,7 @@ TEST(ToolBreakageDetector, ASuspectThatFallsAgainIsKeptFromItsLastFall) {
   const double edge[4] = {280, 280, 280, 180};
   const double broken[4] = {170, 210, 200, 20};
   const double taken[4] = {200, 200, 190, 15};
-  const int at = cut.exit_then_break(edge, broken, taken);
-  EXPECT_GE(at, 0) << "the second fall, taken up";
-  EXPECT_LT(at, cut.p.samples_per_revolution / 8) << "by the taker's rise";
-  EXPECT_EQ(cut.s.breakage_window, 3);
+  cut.expect_taken_early(edge, broken, taken);
 }
 
 // In the first compared revolutions (the controller's entry transient) and
