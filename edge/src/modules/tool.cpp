@@ -275,20 +275,19 @@ void ToolBreakageDetector::judge_exit(Signals& s, int j, double change_j, double
   const double score = std::fabs(fall);
   largest_score_ = std::max(largest_score_, score);
   if (score <= p_.breakage_threshold) return;
-  // A rise: the chip came from a window within the cut's arc of it, the
-  // one that fell most.
+  // A rise: the chip came from a window within the cut's arc of it (the
+  // window before it always is), the one that fell most.
   int lost = m;
   if (fall < 0) {
-    lost = -1;
-    double lost_change = 0;
+    lost = b;
+    double lost_change = change_[b];
     for (int k = 0; k < n; ++k) {
       const double c = k == j ? change_j : change_[k];
-      if (adjacent(k, m) && (compared_[k] || k == j) && (lost < 0 || c < lost_change)) {
+      if (adjacent(k, m) && (compared_[k] || k == j) && c < lost_change) {
         lost = k;
         lost_change = c;
       }
     }
-    if (lost < 0) lost = b;
   }
   s.tool_broken = true;
   s.breakage_window = lost;

@@ -353,10 +353,10 @@ std::unique_ptr<Module> make_module(ModuleId id);
 // threshold's share of the mean window, beyond the common change and by
 // half that in itself) within a revolution before or after the window's
 // last fall. Leaving the part, every window is also judged against its
-// neighbours in time (the windows before and after it) as the window after
-// it closes: a fall beyond their mean change by more than the threshold's
-// share of the mean window is a lost chip, a rise beyond it a taken one
-// (every window falls through an exit, the taker too). A gap in the
+// neighbours in time (the windows before and after it) with the last sample
+// of the window after it: a fall beyond their mean change by more than the
+// threshold's share of the mean window is a lost chip, a rise beyond it a
+// taken one (every window falls through an exit, the taker too). A gap in the
 // samples (N was inactive) restarts the windows a revolution after N
 // resumes (at once when it resumes as the cutter enters the part: nothing
 // sprang back). f is latched until N is reset.
