@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unsupported/Eigen/FFT>
 
 #include "smc/edge/modules.hpp"
@@ -39,6 +40,8 @@ void AutomaticChatterDetector::reset() noexcept {
   filled_ = 0;
   above_ = 0;
   previous_mean_ = 0;
+  last_engagement_ = std::numeric_limits<double>::quiet_NaN();
+  most_engaged_ = last_engagement_;
 }
 
 Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
@@ -107,7 +110,18 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   const double change = std::fabs(last_mean_ - previous_mean_);
   const bool steady = previous_mean_ != 0 && change <= kMaxMeanChange * std::fabs(previous_mean_);
   previous_mean_ = last_mean_;
-  if (!steady) {
+  // Nor while the cutter leaves the part (the drive's engagement below the
+  // most it reached since it last rose: it moves in steps, and may hold for
+  // a revolution; NaN: unknown, judged): the part's end takes part of the
+  // arc every revolution, however slowly the mean moves, and with runout
+  // that change read as chatter at stable exits of the detector study
+  // (edge/README.md, module E). Entering, it is judged: most chatter starts
+  // there, none started while leaving in that study.
+  const double engagement = s.engagement;
+  if (!(engagement <= last_engagement_)) most_engaged_ = engagement;  // rose, or was unknown
+  last_engagement_ = engagement;
+  const bool leaving = engagement < most_engaged_ - 1e-9;
+  if (!steady || leaving) {
     s.chatter_ratio = 0;  // not judged
     return Status::kOk;
   }

@@ -394,6 +394,46 @@ TEST(AutomaticChatterDetector, NoDecisionWhileTheMeanForceChanges) {
   EXPECT_TRUE(feed(205, 120).chatter_detected);  // the second judged revolution above
 }
 
+// Leaving the part (the drive's engagement below the most it reached since
+// it last rose) a revolution is not judged either, however little its mean
+// moved: the part's end takes part of the arc every revolution. Entering
+// (the engagement rising) it is, and an unknown engagement (NaN) is judged.
+TEST(AutomaticChatterDetector, NoDecisionWhileTheCutterLeavesThePart) {
+  AutomaticChatterDetector e;
+  const EdgeParameters p = params();
+  e.configure(p);
+  const double dt = p.sample_period_s;
+  auto feed = [&](double engagement, double chatter_amp) {
+    Signals s;
+    s.spindle_rpm = 1500;
+    s.engagement = engagement;
+    s.revolution_samples = p.samples_per_revolution;
+    for (int k = 0; k < p.samples_per_revolution; ++k) {
+      const double t = k * dt;
+      s.sample.f_z_n = 300 + 80 * std::sin(2 * std::numbers::pi * 100 * t) +
+                       chatter_amp * std::sin(2 * std::numbers::pi * 620 * t + 1.0);
+      e.on_sample(s);
+    }
+    e.update(s);
+    return s;
+  };
+  feed(0.8, 0);
+  EXPECT_GT(feed(0.9, 120).chatter_ratio, p.chatter_threshold);  // entering: judged
+  EXPECT_LT(feed(1.0, 0).chatter_ratio, p.chatter_threshold);  // in the cut, below: count restarts
+  const Signals first = feed(0.95, 120);                       // leaving: not judged
+  EXPECT_EQ(first.chatter_ratio, 0);
+  const Signals second = feed(0.9, 120);
+  EXPECT_EQ(second.chatter_ratio, 0);
+  const Signals held = feed(0.9, 120);  // the drive's engagement moves in steps
+  EXPECT_EQ(held.chatter_ratio, 0);
+  EXPECT_FALSE(held.chatter_detected) << "three revolutions above, none judged";
+  EXPECT_EQ(feed(0.2, 0).chatter_ratio, 0);                      // out of the part
+  EXPECT_GT(feed(0.4, 120).chatter_ratio, p.chatter_threshold);  // the next pass enters: judged
+  EXPECT_LT(feed(0.4, 0).chatter_ratio, p.chatter_threshold);    // judged, below: count restarts
+  EXPECT_GT(feed(std::nan(""), 120).chatter_ratio, p.chatter_threshold);  // unknown: judged
+  EXPECT_TRUE(feed(std::nan(""), 120).chatter_detected);
+}
+
 TEST(AutomaticChatterDetector, NoDecisionBelowTheRmsFloor) {
   AutomaticChatterDetector e;
   const EdgeParameters p = params();

@@ -76,7 +76,9 @@ class OperatorChatterDetector final : public Module {
 // energy in the search band outside a guard band around each tooth-passing
 // harmonic; the statistic is its share of the total AC energy. d is set when
 // the statistic exceeds the threshold for `chatter_confirm_revolutions`
-// consecutive revolutions and stays set until reset.
+// consecutive judged revolutions and stays set until reset. A revolution
+// whose mean F_z moved by more than a tenth, or over which the drive's
+// engagement fell (the cutter leaving the part), is not judged.
 class AutomaticChatterDetector final : public Module {
  public:
   AutomaticChatterDetector();
@@ -108,6 +110,8 @@ class AutomaticChatterDetector final : public Module {
   int filled_ = 0;
   int above_ = 0;
   double last_mean_ = 0, previous_mean_ = 0;
+  double last_engagement_ = 0;  // the drive's, at the last revolution (NaN: unknown)
+  double most_engaged_ = 0;     // and the most it reached since it last rose
   static constexpr double kMaxMeanChange = 0.1;
 };
 
