@@ -77,8 +77,9 @@ class OperatorChatterDetector final : public Module {
 // harmonic; the statistic is its share of the total AC energy. d is set when
 // the statistic exceeds the threshold for `chatter_confirm_revolutions`
 // consecutive judged revolutions and stays set until reset. A revolution
-// whose mean F_z moved by more than a tenth, or over which the drive's
-// engagement fell (the cutter leaving the part), is not judged.
+// whose mean F_z moved by more than a tenth, or while the drive's engagement
+// is below the most it reached since it last rose (the cutter leaving the
+// part; NaN: unknown, judged), is not judged.
 class AutomaticChatterDetector final : public Module {
  public:
   AutomaticChatterDetector();
