@@ -366,25 +366,36 @@ TEST(AutomaticChatterDetector, AtLowSpeedTheGuardIsTheHarmonicsOwnBin) {
   EXPECT_NEAR(s.chatter_frequency_hz, 612.5, 1e-9);
 }
 
+namespace {
+
+// One revolution at 1500 rpm through E: F_z at `mean` with a tooth harmonic
+// (100 Hz) and `chatter_amp` of 620 Hz, the drive's engagement as given.
+Signals chatter_revolution(AutomaticChatterDetector& e, const EdgeParameters& p, double mean,
+                           double chatter_amp, double engagement) {
+  Signals s;
+  s.spindle_rpm = 1500;
+  s.engagement = engagement;
+  s.revolution_samples = p.samples_per_revolution;
+  for (int k = 0; k < p.samples_per_revolution; ++k) {
+    const double t = k * p.sample_period_s;
+    s.sample.f_z_n = mean + 80 * std::sin(2 * std::numbers::pi * 100 * t) +
+                     chatter_amp * std::sin(2 * std::numbers::pi * 620 * t + 1.0);
+    e.on_sample(s);
+  }
+  e.update(s);
+  return s;
+}
+
+}  // namespace
+
 // Entering or leaving the part the mean force changes from one revolution to
 // the next; such a revolution is not judged, and does not break a count.
 TEST(AutomaticChatterDetector, NoDecisionWhileTheMeanForceChanges) {
   AutomaticChatterDetector e;
   const EdgeParameters p = params();
   e.configure(p);
-  const double dt = p.sample_period_s;
   auto feed = [&](double mean, double chatter_amp) {
-    Signals s;
-    s.spindle_rpm = 1500;
-    s.revolution_samples = p.samples_per_revolution;
-    for (int k = 0; k < p.samples_per_revolution; ++k) {
-      const double t = k * dt;
-      s.sample.f_z_n = mean + 80 * std::sin(2 * std::numbers::pi * 100 * t) +
-                       chatter_amp * std::sin(2 * std::numbers::pi * 620 * t + 1.0);
-      e.on_sample(s);
-    }
-    e.update(s);
-    return s;
+    return chatter_revolution(e, p, mean, chatter_amp, std::nan(""));
   };
   feed(300, 0);
   EXPECT_GT(feed(300, 120).chatter_ratio, p.chatter_threshold);  // judged: one above
@@ -402,20 +413,8 @@ TEST(AutomaticChatterDetector, NoDecisionWhileTheCutterLeavesThePart) {
   AutomaticChatterDetector e;
   const EdgeParameters p = params();
   e.configure(p);
-  const double dt = p.sample_period_s;
   auto feed = [&](double engagement, double chatter_amp) {
-    Signals s;
-    s.spindle_rpm = 1500;
-    s.engagement = engagement;
-    s.revolution_samples = p.samples_per_revolution;
-    for (int k = 0; k < p.samples_per_revolution; ++k) {
-      const double t = k * dt;
-      s.sample.f_z_n = 300 + 80 * std::sin(2 * std::numbers::pi * 100 * t) +
-                       chatter_amp * std::sin(2 * std::numbers::pi * 620 * t + 1.0);
-      e.on_sample(s);
-    }
-    e.update(s);
-    return s;
+    return chatter_revolution(e, p, 300, chatter_amp, engagement);
   };
   feed(0.8, 0);
   EXPECT_GT(feed(0.9, 120).chatter_ratio, p.chatter_threshold);  // entering: judged
