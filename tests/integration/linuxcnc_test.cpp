@@ -294,23 +294,40 @@ std::vector<Watch> read_watch(const std::string& path) {
   return rows;
 }
 
+// A CSV line's fields.
+std::vector<std::string> csv_fields(const std::string& line) {
+  std::vector<std::string> f;
+  std::size_t from = 0;
+  for (std::size_t at; (at = line.find(',', from)) != std::string::npos; from = at + 1) {
+    f.push_back(line.substr(from, at - from));
+  }
+  f.push_back(line.substr(from));
+  return f;
+}
+
 // The position of the cutter's axis (mm) in the last revolution of a run's
 // revolutions.csv in contact with F_Y above `force_n`: where its cut ended.
+// Columns are found by their header names (x_mm, f_y_peak_n, contact).
 double last_cutting_x(const std::string& path, double force_n) {
   std::ifstream in(path);
   std::string line;
-  // Header: t_s,revolution,pass_index,pass_count,x_mm,depth_mm,f_y_peak_n,...,contact (16th).
   std::getline(in, line);
+  const std::vector<std::string> header = csv_fields(line);
+  auto column = [&](const char* name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    return it == header.end() ? header.size() : static_cast<std::size_t>(it - header.begin());
+  };
+  const std::size_t x = column("x_mm"), f_y = column("f_y_peak_n"), contact = column("contact");
+  const std::size_t needed = std::max({x, f_y, contact}) + 1;
+  if (needed > header.size()) {
+    ADD_FAILURE() << path << ": no x_mm, f_y_peak_n or contact column in '" << line << "'";
+    return -1;
+  }
   double last = -1;
   while (std::getline(in, line)) {
-    std::vector<std::string> f;
-    std::size_t from = 0;
-    for (std::size_t at; (at = line.find(',', from)) != std::string::npos; from = at + 1) {
-      f.push_back(line.substr(from, at - from));
-    }
-    f.push_back(line.substr(from));
-    if (f.size() < 16) continue;
-    if (std::atof(f[6].c_str()) > force_n && f[15] == "1") last = std::atof(f[4].c_str());
+    const std::vector<std::string> f = csv_fields(line);
+    if (f.size() < needed) continue;
+    if (std::atof(f[f_y].c_str()) > force_n && f[contact] == "1") last = std::atof(f[x].c_str());
   }
   return last;
 }
