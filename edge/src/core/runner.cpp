@@ -69,10 +69,10 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
       const DriveSample& d = core.drive_sample();
       const Signals& s = core.signals();
       run.samples.push_back(TraceSample{
-          d.force.t_s, d.x_mm, d.force.f_y_n, d.force.f_z_n, s.f_y_peak_n, s.force_reference_n,
-          s.feedrate_cmd_mm_s, d.depth_mm, d.spindle_rpm, d.spindle_power_w, d.vibration_y_mm,
-          d.engagement, static_cast<int16_t>(d.pass_index), d.in_pass, s.contact, s.active,
-          core.situation().active_steps});
+          d.force.t_s, d.x_mm, d.force.f_y_n, d.force.f_z_n, d.force.f_y_wide_n, s.f_y_peak_n,
+          s.force_reference_n, s.feedrate_cmd_mm_s, d.depth_mm, d.spindle_rpm, d.spindle_power_w,
+          d.vibration_y_mm, d.engagement, static_cast<int16_t>(d.pass_index), d.in_pass, s.contact,
+          s.active, core.situation().active_steps});
     }
     while (core.events().try_pop(ev)) {
       if (ev.kind == EventKind::kToolBroken && run.tool_broken_s < 0) run.tool_broken_s = ev.t_s;
@@ -169,11 +169,18 @@ double chatter_onset(const RunResult& run, double still_period_s) {
   // settles; chatter makes it grow. Onset: a comparable revolution above the
   // threshold and above the one before, followed by a larger one -- or by
   // one that is not comparable any more (a hold or a rewrite reacting to it,
-  // or the end of the pass).
+  // or the end of the pass). The growth may pause for one revolution that
+  // stays above the threshold (chatter locking onto a spindle harmonic: the
+  // paper's SMC II run gave 0.259 then 0.255), if the one after is larger
+  // still or not comparable; a falling entry never passes that.
   for (size_t r = 2; r + 1 < revs; ++r) {
     if (!comparable[r] || !comparable[r - 1]) continue;
     if (ratio[r] <= kOnsetThreshold || ratio[r] <= ratio[r - 1]) continue;
     if (!comparable[r + 1] || ratio[r + 1] > ratio[r]) return run.samples[starts[r]].t_s;
+    if (ratio[r + 1] > kOnsetThreshold && r + 2 < revs &&
+        (!comparable[r + 2] || ratio[r + 2] > ratio[r])) {
+      return run.samples[starts[r]].t_s;
+    }
   }
   return -1;
 }

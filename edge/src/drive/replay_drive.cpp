@@ -64,6 +64,7 @@ ReplayDrive::ReplayDrive(const std::string& path, double sample_period_s)
     r.f_x_n = get("f_x_n", 0);
     r.f_y_n = get("f_y_n", 0);
     r.f_z_n = get("f_z_n", 0);
+    r.f_y_wide_n = get("f_y_wide_n", std::nan(""));
     r.x_mm = get("x_mm", 0);
     r.depth_mm = get("depth_mm", -1);
     r.spindle_rpm = get("spindle_rpm", -1);
@@ -90,7 +91,7 @@ Status ReplayDrive::step(double /*feedrate_cmd_mm_s*/, DriveSample& out) noexcep
   const Row& r = rows_[next_++];
   const int pass = r.pass_index < program_.count ? r.pass_index : 0;
   const PassSpec& spec = program_.passes[static_cast<size_t>(pass)];
-  out.force = ForceSample{r.t_s, r.f_x_n, r.f_y_n, r.f_z_n};
+  out.force = ForceSample{r.t_s, r.f_x_n, r.f_y_n, r.f_z_n, r.f_y_wide_n};
   out.spindle_rpm = r.spindle_rpm >= 0 ? r.spindle_rpm : spec.spindle_rpm;
   out.depth_mm = r.depth_mm >= 0 ? r.depth_mm : spec.depth_mm;
   out.programmed_feedrate_mm_s = spec.feedrate_mm_s;

@@ -24,6 +24,12 @@ namespace {
 
 using LowPass = machining::AntiAliasLowPass;
 
+// The seed of the wideband F_y channel's noise: derived from the run's, and
+// different from it.
+constexpr std::uint64_t wide_seed(std::uint64_t seed) noexcept {
+  return seed ^ 0x9e3779b97f4a7c15ULL;
+}
+
 enum class Phase { kCutting, kRepositioning, kDone };
 
 }  // namespace
@@ -35,8 +41,15 @@ struct SimulatedMill::Impl {
   // The force of each internal step of the last sample, for the filters.
   std::vector<double> trace_x, trace_y, trace_z;
   LowPass lp_x, lp_y, lp_z;
+  LowPass lp_y_wide;  // F_y through the F_z channel's filter (ForceSample::f_y_wide_n)
   std::mt19937_64 rng;
   std::normal_distribution<double> noise{0.0, 1.0};
+  // The wideband channel's noise has its own stream and its own distribution
+  // (a normal distribution keeps the second value of each pair it draws), so
+  // that adding the channel left the other channels' noise, and every study
+  // before it, as they were.
+  std::mt19937_64 rng_wide;
+  std::normal_distribution<double> noise_wide{0.0, 1.0};
   // Depth already removed by earlier passes, per bin along the part (mm).
   std::vector<double> removed;
   double bin_mm = 0.25;
@@ -70,7 +83,8 @@ struct SimulatedMill::Impl {
       : model(std::move(m)),
         sim(model, sim_options(model, o, period_s)),
         options(o),
-        rng(o.seed()) {}
+        rng(o.seed()),
+        rng_wide(wide_seed(o.seed())) {}
 
   static machining::SimulatorOptions sim_options(const machining::MillingModel& m,
                                                  const smc::config::SimulatedMill& o,
@@ -154,6 +168,7 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
   s.lp_x.configure(sim.f_y_cutoff_hz(), rate);
   s.lp_y.configure(sim.f_y_cutoff_hz(), rate);
   s.lp_z.configure(sim.f_z_cutoff_hz(), rate);
+  s.lp_y_wide.configure(sim.f_z_cutoff_hz(), rate);
   s.removed.assign(static_cast<size_t>(std::ceil(s.length() / s.bin_mm)) + 1, 0.0);
   const auto& w = s.model.workpiece;
   const double y_lo = w.offset_mm - w.width_mm / 2, y_hi = w.offset_mm + w.width_mm / 2;
@@ -206,7 +221,9 @@ void SimulatedMill::load(const FixedProgram& program) {
   s.lp_x.reset();
   s.lp_y.reset();
   s.lp_z.reset();
+  s.lp_y_wide.reset();
   s.rng.seed(s.options.seed());
+  s.rng_wide.seed(wide_seed(s.options.seed()));
   s.time_s = 0;
   // A run starts with the cutter as built.
   for (int i = 0; i < static_cast<int>(s.runout_mm.size()); ++i) {
@@ -274,12 +291,13 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   }
   machining::Sample smp;
   uint32_t status = 0;
-  double fx = 0, fy = 0, fz = 0;
+  double fx = 0, fy = 0, fz = 0, fy_wide = 0;
   status |= s.sim.step(in, smp, {s.trace_x.data(), s.trace_y.data(), s.trace_z.data()});
   for (std::size_t k = 0; k < s.trace_x.size(); ++k) {
     fx = s.lp_x(s.trace_x[k]);
     fy = s.lp_y(s.trace_y[k]);
     fz = s.lp_z(s.trace_z[k]);
+    fy_wide = s.lp_y_wide(s.trace_y[k]);
   }
   s.time_s += period_s_;
   if (smp.teeth_in_cut > 0) s.cut_length_mm += in.feedrate_mm_s * period_s_;
@@ -288,9 +306,10 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
     fx += sigma * s.noise(s.rng);
     fy += sigma * s.noise(s.rng);
     fz += sigma * s.noise(s.rng);
+    fy_wide += sigma * s.noise_wide(s.rng_wide);
   }
   const double x = s.sim.tool_position_mm();
-  out.force = ForceSample{s.time_s, fx, fy, fz};
+  out.force = ForceSample{s.time_s, fx, fy, fz, fy_wide};
   out.spindle_rpm = s.rpm_now;
   out.depth_mm = spec.depth_mm;
   out.programmed_feedrate_mm_s = spec.feedrate_mm_s;

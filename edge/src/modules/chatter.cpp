@@ -6,6 +6,7 @@
 #include <unsupported/Eigen/FFT>
 
 #include "smc/edge/modules.hpp"
+#include "smc/machining/structure.hpp"
 
 namespace smc::edge {
 
@@ -33,6 +34,20 @@ void AutomaticChatterDetector::configure(const EdgeParameters& p) {
   for (int n = fewest; n <= static_cast<int>(most); ++n) {
     fft_->fft.fwd(spectrum_.data(), buffer_.data(), n);
   }
+  // The vibration estimate: each y mode discretised exactly at the sample
+  // period (as the simulated mill discretises its own structure); a ring
+  // holding this revolution and the one before, at the slowest supervised
+  // speed, with room for the interpolation.
+  mode_count_ = 0;
+  for (int i = 0; i < std::min(p.vibration_mode_count, EdgeParameters::kMaxVibrationModes); ++i) {
+    const auto& m = p.vibration_modes[i];
+    const auto d = machining::discretise(
+        machining::Mode{m.natural_frequency_rad_s, m.damping_ratio, m.stiffness_n_per_mm},
+        p.sample_period_s);
+    VibrationMode& v = modes_[static_cast<size_t>(mode_count_++)];
+    v = VibrationMode{d.p11, d.p12, d.p21, d.p22, d.g1, d.g2, 0, 0};
+  }
+  vibration_.assign(mode_count_ > 0 ? 2 * most + 4 : 0, 0.0);
   reset();
 }
 
@@ -42,13 +57,60 @@ void AutomaticChatterDetector::reset() noexcept {
   previous_mean_ = 0;
   last_engagement_ = std::numeric_limits<double>::quiet_NaN();
   most_engaged_ = last_engagement_;
+  for (auto& m : modes_) m.q = m.w = 0;
+  vibration_at_ = vibration_run_ = 0;
+  wide_channel_ = false;
+  q1_ = q2_ = std::numeric_limits<double>::quiet_NaN();
+  q_above_ = 0;
 }
 
 Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
   if (filled_ < static_cast<int>(buffer_.size())) {
     buffer_[static_cast<size_t>(filled_++)] = s.sample.f_z_n;
   }
+  if (mode_count_ == 0) return Status::kOk;
+  const double f = s.sample.f_y_wide_n;
+  if (!std::isfinite(f)) {
+    vibration_run_ = 0;  // a gap: the comparison starts again
+    return Status::kOk;
+  }
+  wide_channel_ = true;
+  double v = 0;
+  for (int i = 0; i < mode_count_; ++i) {
+    VibrationMode& m = modes_[static_cast<size_t>(i)];
+    const double q = m.p11 * m.q + m.p12 * m.w + m.g1 * f;
+    m.w = m.p21 * m.q + m.p22 * m.w + m.g2 * f;
+    m.q = q;
+    v += q;
+  }
+  vibration_[static_cast<size_t>(vibration_at_ % vibration_.size())] = v;
+  ++vibration_at_;
+  ++vibration_run_;
   return Status::kOk;
+}
+
+double AutomaticChatterDetector::vibration_ratio(int samples,
+                                                 double period_samples) const noexcept {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (mode_count_ == 0 || samples < 4 || !(period_samples >= 1)) return nan;
+  // This revolution and the one before, back to the sample before the first
+  // one it interpolates, must lie in the unbroken run and in the ring.
+  const auto reach = static_cast<uint64_t>(samples) + static_cast<uint64_t>(period_samples) + 2;
+  if (reach > vibration_run_ || reach > vibration_.size()) return nan;
+  const uint64_t size = vibration_.size();
+  auto at = [&](uint64_t k) { return vibration_[static_cast<size_t>(k % size)]; };
+  double change = 0, energy = 0;
+  const uint64_t first = vibration_at_ - static_cast<uint64_t>(samples);
+  const auto whole = static_cast<uint64_t>(period_samples);
+  const double w = period_samples - static_cast<double>(whole);
+  for (uint64_t k = first; k < vibration_at_; ++k) {
+    // v at k - period: between samples k - whole - 1 and k - whole.
+    const double before = w > 0 ? w * at(k - whole - 1) + (1 - w) * at(k - whole) : at(k - whole);
+    const double now = at(k);
+    change += (now - before) * (now - before);
+    energy += now * now;
+  }
+  return energy > 0 ? std::sqrt(change / energy) : nan;
 }
 
 double AutomaticChatterDetector::statistic(int samples, double spindle_rpm,
@@ -99,8 +161,17 @@ double AutomaticChatterDetector::statistic(int samples, double spindle_rpm,
 Status AutomaticChatterDetector::update(Signals& s) noexcept {
   const int samples = filled_;
   filled_ = 0;
-  // A partial revolution (the detector was just activated): no decision.
-  if (samples != s.revolution_samples) return Status::kOk;
+  s.chatter_vibration_ratio = 0;
+  // A partial revolution (the detector was just activated, or a bad sample
+  // never reached it): no decision, and the estimate's comparison starts
+  // again, since the ring has a gap.
+  if (samples != s.revolution_samples) {
+    vibration_run_ = 0;
+    wide_channel_ = false;
+    q1_ = q2_ = std::numeric_limits<double>::quiet_NaN();
+    q_above_ = 0;
+    return Status::kOk;
+  }
   double freq = 0;
   const double ratio = statistic(samples, s.spindle_rpm, &freq);
   if (!std::isfinite(ratio)) return Status::kError;
@@ -109,6 +180,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   // revolution is not a repetition of the one before: no decision then.
   const double change = std::fabs(last_mean_ - previous_mean_);
   const bool steady = previous_mean_ != 0 && change <= kMaxMeanChange * std::fabs(previous_mean_);
+  const double mean_before = previous_mean_;
   previous_mean_ = last_mean_;
   // Nor while the cutter leaves the part (the drive's engagement below the
   // most it reached since it last rose: it moves in steps, and may hold for
@@ -118,17 +190,64 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   // (edge/README.md, module E). Entering, it is judged: most chatter starts
   // there, none started while leaving in that study.
   const double engagement = s.engagement;
+  // A sudden change of cut that the drive's engagement does not describe (a
+  // step in the depth left by an aborted pass, say): the mean force rose by
+  // more than a tenth beyond the engagement's own rise (unknown: none).
+  const double engaged_more =
+      engagement > 0 && last_engagement_ > 0 ? engagement / last_engagement_ : 1.0;
+  const bool stepped =
+      mean_before != 0 &&
+      std::fabs(last_mean_) > std::fabs(mean_before) * engaged_more * (1 + kMaxMeanChange);
   if (!(engagement <= last_engagement_)) most_engaged_ = engagement;  // rose, or was unknown
   last_engagement_ = engagement;
   const bool leaving = engagement < most_engaged_ - 1e-9;
+
+  // The vibration estimate, where the sensor gives the wideband F_y. Judged
+  // entering the part and while the feed moves (the estimate's change falls
+  // as the cutter enters; chatter makes it grow), not while leaving, nor
+  // across a step in the cut (the estimate's pattern changes with it).
+  // (The channel is there when the revolution had a finite sample of it: a
+  // bad sample does not switch the rules, it only breaks the comparison.)
+  const bool estimate = mode_count_ > 0 && wide_channel_;
+  wide_channel_ = false;
+  if (estimate) {
+    const double rpm = s.spindle_rpm;
+    const double period = std::isfinite(rpm) && rpm >= p_.min_spindle_rpm && rpm > 0
+                              ? 60.0 / rpm / p_.sample_period_s
+                              : std::numeric_limits<double>::quiet_NaN();
+    const double q = vibration_ratio(samples, period);
+    if (std::isfinite(q) && !leaving && !stepped) {
+      s.chatter_vibration_ratio = q;
+      // Rising past `rise` over two judged revolutions in a row, the last
+      // clearly above the one two before (noise alone rises twice in a row
+      // often enough at the small feeds' floor); or high three in a row.
+      const bool rising = q1_ > p_.chatter_vibration_rise && q1_ > q2_ && q > q1_ &&
+                          q > p_.chatter_vibration_growth * q2_;
+      q_above_ = q > p_.chatter_vibration_level ? q_above_ + 1 : 0;
+      if (rising || q_above_ >= kVibrationConfirm) s.chatter_detected = true;
+      q2_ = q1_;
+      q1_ = q;
+    } else {
+      q1_ = q2_ = std::numeric_limits<double>::quiet_NaN();
+      q_above_ = 0;
+    }
+  }
+
   if (!steady || leaving) {
     s.chatter_ratio = 0;  // not judged
+    // With the estimate, S's confirmation restarts (as the study measured
+    // it); alone, it neither counts towards nor breaks one.
+    if (estimate) above_ = 0;
     return Status::kOk;
   }
   s.chatter_ratio = ratio;
   s.chatter_frequency_hz = freq;
-  above_ = ratio > p_.chatter_threshold ? above_ + 1 : 0;
-  if (above_ >= p_.chatter_confirm_revolutions) s.chatter_detected = true;
+  // With the estimate, S is the backup for chatter locked to a spindle
+  // harmonic, at a threshold above runout's share.
+  const double threshold = estimate ? p_.chatter_vibration_backup : p_.chatter_threshold;
+  const int confirm = estimate ? kVibrationConfirm : p_.chatter_confirm_revolutions;
+  above_ = ratio > threshold ? above_ + 1 : 0;
+  if (above_ >= confirm) s.chatter_detected = true;
   return Status::kOk;
 }
 

@@ -226,6 +226,32 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
       p.cut_arc_rad = std::asin(hi) - std::asin(lo);
     }
   }
+  if (cfg.has_milling_model()) {
+    const auto& st = cfg.milling_model().structure();
+    const std::pair<const char*, const google::protobuf::RepeatedPtrField<config::Mode>*> y[] = {
+        {"tool_y", &st.tool_y()}, {"part_y", &st.part_y()}};
+    for (const auto& [name, modes] : y) {
+      for (int i = 0; i < modes->size(); ++i) {
+        const auto& mode = modes->Get(i);
+        const Checker c("supervisor_config.milling_model.structure." + std::string(name) + "[" +
+                            std::to_string(i) + "].",
+                        problems);
+        const double w = c.positive("natural_frequency_rad_s", mode.natural_frequency_rad_s(),
+                                    "give the mode's natural frequency, e.g. 4100");
+        const double zeta = c.in_range("damping_ratio", mode.damping_ratio(), 1e-9, 1 - 1e-9,
+                                       "give the mode's damping ratio, e.g. 0.11");
+        const double k = c.positive("stiffness_n_per_mm", mode.stiffness_n_per_mm(),
+                                    "give the mode's stiffness, e.g. 14000");
+        const bool ok = w > 0 && std::isfinite(w) && zeta >= 1e-9 && zeta <= 1 - 1e-9 && k > 0 &&
+                        std::isfinite(k);
+        // More than kMaxVibrationModes: E uses the first (the README says so).
+        if (ok && p.vibration_mode_count < Parameters::kMaxVibrationModes) {
+          p.vibration_modes[p.vibration_mode_count++] = {
+              mode.natural_frequency_rad_s(), mode.damping_ratio(), mode.stiffness_n_per_mm()};
+        }
+      }
+    }
+  }
 
   if (!sample_ok) return p;  // the derived counts need a sample period
   // A count of sample periods, refused past kMaxCount (a day at 2 kHz: no

@@ -165,7 +165,6 @@ int main(int argc, char** argv) {
   smc::bench::StudyGrid grid;
   int tooth = 2;
   double critical_feed = 0.03;
-  std::string mill_model_file;
   // When the tooth breaks: a share of the path in contact, or revolutions
   // after the first revolution in contact.
   struct Timing {
@@ -179,8 +178,6 @@ int main(int argc, char** argv) {
     const bool more = i + 1 < argc;
     if (std::strcmp(argv[i], "--critical-feed") == 0 && more) {
       critical_feed = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--mill-model") == 0 && more) {
-      mill_model_file = argv[++i];
     } else if (std::strcmp(argv[i], "--tooth") == 0 && more) {
       tooth = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--timings") == 0 && more) {
@@ -218,17 +215,8 @@ int main(int argc, char** argv) {
   auto base = smc::documents::load_supervisor_config(std::string(SMC_SOURCE_DIR) +
                                                      "/edge/configs/smc2_plus.textproto");
   smc::config::MillingModel plant;
-  if (!mill_model_file.empty()) {
-    try {
-      smc::documents::load(mill_model_file, plant);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr,
-                   "--mill-model: %s (a MillingModel in text format, e.g. "
-                   "cell/models/paper_face_mill_mismatched.textproto)\n",
-                   e.what());
-      return 2;
-    }
-  }
+  if (!grid.load_mill_model(plant)) return 2;
+  const std::string& mill_model_file = grid.mill_model_file;
   const double fpt = 0.1;
   const double threshold = edge_config_from_proto(base).params.breakage_threshold;
   const double floor_n = ToolBreakageDetector::force_floor_n(edge_config_from_proto(base).params);

@@ -4,6 +4,8 @@
 //   build/release/bin/smc-bench-chatter-detector [--seeds N] [--speeds 750,1100,...]
 //       [--widths 25,37,50] [--fractions 0.3,0.6,0.9,1.3,1.8] [--runouts 0,10,20]
 //       [--quick] [--verbose] [--dump FILE.csv] [--dump-samples STEM]
+//       [--force-only] [--vibration-rise X] [--vibration-growth X]
+//       [--vibration-level X] [--vibration-backup X] [--mill-model FILE]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
@@ -15,17 +17,25 @@
 // summary's chatter onset): stable cuts give the false-alarm figures
 // (revolutions in the cut whose statistic exceeded the threshold, confirmed
 // detections, the largest statistic), unstable cuts the delay from the onset
-// to E's detection, in revolutions. Progress goes to stderr. --dump writes
+// to E's detection, in revolutions. E judges the vibration it estimates
+// from the simulated dynamometer's wideband F_y channel, with S as the
+// backup (edge/README.md, module E); --force-only takes the estimate away
+// (S alone, as on a sensor without that channel), and --vibration-* set its
+// rules' parameters. --mill-model FILE: the simulated mill cuts with that
+// model's structure and cutting law (e.g.
+// cell/models/paper_face_mill_mismatched.textproto), while E and the
+// critical depths keep the configuration's. Progress goes to stderr. --dump writes
 // every revolution E judged or skipped in contact (statistic, engagement,
 // feed) with its run's onset, to try other decision rules offline: what
 // happens before E's first detection does not depend on the rule (run with
-// --threshold 1 so that E never fires). --dump-samples STEM writes every
+// --threshold 1 so that E never fires: it also switches the vibration
+// rules off). --dump-samples STEM writes every
 // run's samples and revolutions, to try other statistics offline:
 // STEM.runs.csv (one line per run: its grid point, onset and detection
 // times, and where its records start in the two binary files and how many
-// there are), STEM.samples.bin (21-byte records, little-endian: t_s f64,
-// F_z f32, feed rate f32, relative vibration y f32, flags u8 -- bit 0
-// contact, bit 1 E active, bit 2 in a pass) and STEM.revs.bin (17-byte
+// there are), STEM.samples.bin (25-byte records, little-endian: t_s f64,
+// F_z f32, feed rate f32, relative vibration y f32, wideband F_y f32, flags
+// u8 -- bit 0 contact, bit 1 E active, bit 2 in a pass) and STEM.revs.bin (17-byte
 // records: t_s f64, E's statistic f32, feed per tooth f32, flags u8 -- bit
 // 0 contact, bit 1 E active). A revolution's samples are those after the
 // revolution before, up to its own t_s.
@@ -56,7 +66,8 @@ struct Cell {
   double rpm = 0, width = 0, runout = 0;
   int runs = 0, stable_runs = 0, unstable_runs = 0, detected = 0, false_detections = 0;
   uint64_t stable_revs = 0, exceed = 0;
-  double stable_max = 0, worst_delay_revs = 0, unstable_min_peak = 1e9;
+  int within3 = 0;
+  double stable_max = 0, stable_max_q = 0, worst_delay_revs = 0, unstable_min_peak = 1e9;
 };
 
 }  // namespace
@@ -68,6 +79,8 @@ int main(int argc, char** argv) {
   grid.runouts = {0};
   double threshold_override = 0;
   int confirm_override = 0;
+  bool force_only = false;
+  double rise = -1, growth = -1, level = -1, backup = -1;  // < 0: the shipped values
   std::FILE* dump = nullptr;
   std::FILE* raw_runs = nullptr;
   std::FILE* raw_samples = nullptr;
@@ -78,6 +91,16 @@ int main(int argc, char** argv) {
     const bool more = i + 1 < argc;
     if (std::strcmp(argv[i], "--threshold") == 0 && more) {
       threshold_override = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--force-only") == 0) {
+      force_only = true;
+    } else if (std::strcmp(argv[i], "--vibration-rise") == 0 && more) {
+      rise = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-growth") == 0 && more) {
+      growth = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-level") == 0 && more) {
+      level = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-backup") == 0 && more) {
+      backup = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
       confirm_override = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--dump-samples") == 0 && more) {
@@ -99,13 +122,15 @@ int main(int argc, char** argv) {
         return 2;
       }
       std::fprintf(dump,
-                   "run,rpm,width,runout,fraction,seed,onset_s,t_s,statistic,engagement,"
-                   "feed_per_tooth_mm\n");
+                   "run,rpm,width,runout,fraction,seed,onset_s,t_s,statistic,vibration_ratio,"
+                   "engagement,feed_per_tooth_mm\n");
     } else {
       std::fprintf(stderr,
                    "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
                    "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose] "
-                   "[--dump FILE.csv] [--dump-samples STEM]\n",
+                   "[--dump FILE.csv] [--dump-samples STEM] [--force-only] [--vibration-rise X] "
+                   "[--vibration-growth X] [--vibration-level X] [--vibration-backup X] "
+                   "[--mill-model FILE]\n",
                    argv[0]);
       return 2;
     }
@@ -119,23 +144,56 @@ int main(int argc, char** argv) {
   const bool verbose = grid.verbose;
   auto base = smc::documents::load_supervisor_config(std::string(SMC_SOURCE_DIR) +
                                                      "/edge/configs/smc2.textproto");
+  smc::config::MillingModel plant;
+  if (!grid.load_mill_model(plant)) return 2;
+  const std::string& mill_model_file = grid.mill_model_file;
   if (confirm_override > 0) {
     base.mutable_operation()->set_chatter_confirm_revolutions(
         static_cast<uint32_t>(confirm_override));
   }
   if (threshold_override > 0) base.mutable_operation()->set_chatter_threshold(threshold_override);
   const double fpt = 0.1;
-  const double threshold = base.operation().chatter_threshold();
+  // The study's rules on E's parameters (the configuration message does not
+  // carry the vibration rules).
+  auto tune = [&](EdgeParameters& ep) {
+    if (force_only) ep.vibration_mode_count = 0;
+    if (rise >= 0) ep.chatter_vibration_rise = rise;
+    if (growth >= 0) ep.chatter_vibration_growth = growth;
+    if (level >= 0) ep.chatter_vibration_level = level;
+    if (backup >= 0) ep.chatter_vibration_backup = backup;
+    if (threshold_override >= 1) {  // E never fires
+      ep.chatter_vibration_rise = ep.chatter_vibration_level = HUGE_VAL;
+      ep.chatter_vibration_backup = 2;  // S is a share: at most 1
+    }
+  };
+  EdgeParameters shown = edge_config_from_proto(base).params;
+  tune(shown);
+  const bool estimate = shown.vibration_mode_count > 0;
+  // S's threshold in use: the backup's beside the estimate.
+  const double threshold = estimate ? shown.chatter_vibration_backup : shown.chatter_threshold;
+  if (estimate) {
+    std::printf(
+        "module E: the vibration estimated from the wideband F_y through %d y modes, q = "
+        "RMS(v_k - v_k-1) / RMS(v_k): chatter when q rises past %.2f over two revolutions in a "
+        "row (the last above %.2f x the one two before), or exceeds %.2f in 3; or when S, the "
+        "non-harmonic share of F_z energy, exceeds %.2f in 3",
+        shown.vibration_mode_count, shown.chatter_vibration_rise, shown.chatter_vibration_growth,
+        shown.chatter_vibration_level, shown.chatter_vibration_backup);
+  } else {
+    std::printf(
+        "module E: threshold %.2f on S, the non-harmonic share of F_z energy, %d revolutions "
+        "to confirm",
+        shown.chatter_threshold, shown.chatter_confirm_revolutions);
+  }
   std::printf(
-      "module E: threshold %.2f on the non-harmonic share of F_z energy, %u revolutions "
-      "to confirm, band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms; programmed %.2f "
-      "mm/tooth, %d seeds\n\n",
-      threshold, base.operation().chatter_confirm_revolutions(),
+      "; band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms; programmed %.2f mm/tooth, %d "
+      "seeds; the mill: %s\n\n",
       base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
-      base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(), fpt, seeds);
-  std::printf("%6s %6s %6s %8s %6s %9s %8s %8s %8s %8s %9s %10s\n", "rpm", "width", "runout",
-              "crit_mm", "runs", "stable", "revs", "exceed", "false", "max_stat", "unstable",
-              "delay_rev");
+      base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(), fpt, seeds,
+      mill_model_file.empty() ? "the configuration's model" : mill_model_file.c_str());
+  std::printf("%6s %6s %6s %8s %6s %9s %8s %8s %8s %8s %8s %9s %8s %10s\n", "rpm", "width",
+              "runout", "crit_mm", "runs", "stable", "revs", "S_above", "false", "max_S", "max_q",
+              "unstable", "within3", "delay_rev");
   std::vector<Cell> cells;
   int run_id = 0;
   Cell all;
@@ -176,7 +234,12 @@ int main(int argc, char** argv) {
             raw.mutable_program()->set_total_depth_mm(depth);
             raw.mutable_simulation()->set_seed(static_cast<uint64_t>(seed));
             EdgeConfig cfg = edge_config_from_proto(raw);
-            SimulatedMill mill(raw.milling_model(), raw.simulation(), cfg.params.sample_period_s);
+            tune(cfg.params);
+            // The mill that cuts: the configuration's model, or --mill-model's
+            // with this cutter (runout) and part (width).
+            auto mill_msg = raw.milling_model();
+            if (!mill_model_file.empty()) use_plant_model(mill_msg, plant);
+            SimulatedMill mill(mill_msg, raw.simulation(), cfg.params.sample_period_s);
             EdgeCore core(cfg, mill);
             core.start();
             RunOptions opts;
@@ -188,21 +251,22 @@ int main(int argc, char** argv) {
             if (dump != nullptr) {
               for (const auto& r : run.revolutions) {
                 if ((r.active & bit(ModuleId::E)) == 0 || !r.contact) continue;
-                std::fprintf(dump, "%d,%.0f,%.0f,%.0f,%.2f,%d,%.4f,%.4f,%.5f,%.4f,%.5f\n", run_id,
-                             rpm, width, runout, fraction, seed, s.chatter_onset_s(), r.t_s,
-                             r.chatter_ratio, r.engagement_min, r.feed_per_tooth_mm);
+                std::fprintf(dump, "%d,%.0f,%.0f,%.0f,%.2f,%d,%.4f,%.4f,%.5f,%.5f,%.4f,%.5f\n",
+                             run_id, rpm, width, runout, fraction, seed, s.chatter_onset_s(), r.t_s,
+                             r.chatter_ratio, r.chatter_vibration_ratio, r.engagement_min,
+                             r.feed_per_tooth_mm);
               }
             }
             if (raw_runs != nullptr) {
               uint64_t ns = 0, nr = 0;
               for (const auto& t : run.samples) {
-                const float v[3] = {static_cast<float>(t.f_z_n),
-                                    static_cast<float>(t.feedrate_mm_s),
-                                    static_cast<float>(t.vibration_y_mm)};
+                const float v[4] = {
+                    static_cast<float>(t.f_z_n), static_cast<float>(t.feedrate_mm_s),
+                    static_cast<float>(t.vibration_y_mm), static_cast<float>(t.f_y_wide_n)};
                 const uint8_t flags = (t.contact ? 1 : 0) |
                                       ((t.active & bit(ModuleId::E)) ? 2 : 0) | (t.in_pass ? 4 : 0);
                 std::fwrite(&t.t_s, 8, 1, raw_samples);
-                std::fwrite(v, 4, 3, raw_samples);
+                std::fwrite(v, 4, 4, raw_samples);
                 std::fwrite(&flags, 1, 1, raw_samples);
                 ++ns;
               }
@@ -226,17 +290,20 @@ int main(int argc, char** argv) {
               raw_rev_at += nr;
             }
             uint64_t revs = 0, exceed = 0;
-            double max_ratio = 0;
+            double max_ratio = 0, max_q = 0;
             for (const auto& r : run.revolutions) {
               if ((r.active & bit(ModuleId::E)) == 0 || !r.contact) continue;
               if (first_detection >= 0 && r.t_s > first_detection) break;
               ++revs;
-              if (verbose && r.chatter_ratio > 0.5 * threshold) {
-                std::fprintf(stderr, "    t %.3f x %.1f engagement %.2f F_Y %.0f stat %.3f\n",
-                             r.t_s, r.x_mm, r.engagement_min, r.f_y_peak_n, r.chatter_ratio);
+              if (verbose && (r.chatter_ratio > 0.5 * threshold ||
+                              r.chatter_vibration_ratio > 0.5 * shown.chatter_vibration_rise)) {
+                std::fprintf(stderr, "    t %.3f x %.1f engagement %.2f F_Y %.0f S %.3f q %.3f\n",
+                             r.t_s, r.x_mm, r.engagement_min, r.f_y_peak_n, r.chatter_ratio,
+                             r.chatter_vibration_ratio);
               }
               if (r.chatter_ratio > threshold) ++exceed;
               max_ratio = std::max(max_ratio, r.chatter_ratio);
+              max_q = std::max(max_q, r.chatter_vibration_ratio);
             }
             ++c.runs;
             if (verbose) {
@@ -251,6 +318,7 @@ int main(int argc, char** argv) {
               c.stable_revs += revs;
               c.exceed += exceed;
               c.stable_max = std::max(c.stable_max, max_ratio);
+              c.stable_max_q = std::max(c.stable_max_q, max_q);
               c.false_detections += first_detection >= 0 ? 1 : 0;
             } else {
               ++c.unstable_runs;
@@ -258,16 +326,18 @@ int main(int argc, char** argv) {
                 ++c.detected;
                 const double delay = (first_detection - s.chatter_onset_s()) * rpm / 60.0;
                 c.worst_delay_revs = std::max(c.worst_delay_revs, delay);
+                if (delay <= 3.0) ++c.within3;
                 c.unstable_min_peak = std::min(c.unstable_min_peak, max_ratio);
               }
             }
           }
         }
-        std::printf("%6.0f %6.0f %6.0f %8.2f %6d %9d %8llu %8llu %8d %8.3f %5d/%-3d %10.1f\n", rpm,
-                    width, runout, crit.critical_depth_mm, c.runs, c.stable_runs,
-                    static_cast<unsigned long long>(c.stable_revs),
-                    static_cast<unsigned long long>(c.exceed), c.false_detections, c.stable_max,
-                    c.detected, c.unstable_runs, c.worst_delay_revs);
+        std::printf(
+            "%6.0f %6.0f %6.0f %8.2f %6d %9d %8llu %8llu %8d %8.3f %8.3f %5d/%-3d %8d %10.1f\n",
+            rpm, width, runout, crit.critical_depth_mm, c.runs, c.stable_runs,
+            static_cast<unsigned long long>(c.stable_revs),
+            static_cast<unsigned long long>(c.exceed), c.false_detections, c.stable_max,
+            c.stable_max_q, c.detected, c.unstable_runs, c.within3, c.worst_delay_revs);
         std::fflush(stdout);
         all.runs += c.runs;
         all.stable_runs += c.stable_runs;
@@ -277,6 +347,8 @@ int main(int argc, char** argv) {
         all.stable_revs += c.stable_revs;
         all.exceed += c.exceed;
         all.stable_max = std::max(all.stable_max, c.stable_max);
+        all.stable_max_q = std::max(all.stable_max_q, c.stable_max_q);
+        all.within3 += c.within3;
         all.worst_delay_revs = std::max(all.worst_delay_revs, c.worst_delay_revs);
         if (c.detected > 0)
           all.unstable_min_peak = std::min(all.unstable_min_peak, c.unstable_min_peak);
@@ -286,15 +358,15 @@ int main(int argc, char** argv) {
   }
   std::fprintf(stderr, "\n");
   std::printf(
-      "\nstable cuts: %d runs, %llu revolutions in the cut, %llu above threshold, %d confirmed "
-      "false detections; largest statistic %.3f (margin: threshold / largest = %.2f)\n",
+      "\nstable cuts: %d runs, %llu revolutions in the cut, %llu with S above %.2f, %d confirmed "
+      "false detections; largest S %.3f (margin: threshold / largest = %.2f); largest q %.3f\n",
       all.stable_runs, static_cast<unsigned long long>(all.stable_revs),
-      static_cast<unsigned long long>(all.exceed), all.false_detections, all.stable_max,
-      all.stable_max > 0 ? threshold / all.stable_max : 0.0);
+      static_cast<unsigned long long>(all.exceed), threshold, all.false_detections, all.stable_max,
+      all.stable_max > 0 ? threshold / all.stable_max : 0.0, all.stable_max_q);
   std::printf(
-      "unstable cuts: %d runs, %d detected; worst delay from onset %.1f revolutions; smallest "
-      "peak statistic of a detected cut %.3f\n",
-      all.unstable_runs, all.detected, all.worst_delay_revs,
+      "unstable cuts: %d runs, %d detected, %d within 3 revolutions of the onset; worst delay "
+      "%.1f revolutions; smallest peak S of a detected cut %.3f\n",
+      all.unstable_runs, all.detected, all.within3, all.worst_delay_revs,
       all.detected > 0 ? all.unstable_min_peak : 0.0);
   const bool pass =
       all.false_detections == 0 && all.detected == all.unstable_runs && all.worst_delay_revs <= 3.0;

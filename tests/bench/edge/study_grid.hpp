@@ -2,11 +2,16 @@
 // The grid of cuts the edge studies sweep (chatter detector, tool-breakage
 // detector), and the command-line options they share.
 
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "smc/documents/load.hpp"
+#include "smc_config.pb.h"
 
 namespace smc::bench {
 
@@ -18,6 +23,9 @@ struct StudyGrid {
   int seeds = 1;
   bool verbose = false;
   bool quick = false;  // 1100 and 2500 rpm, 37 mm
+  // --mill-model FILE: the mill that cuts, with the study's cutter and part
+  // (empty: the configuration's model).
+  std::string mill_model_file;
 
   // A comma-separated list of numbers.
   static std::vector<double> list(const char* text) {
@@ -30,7 +38,7 @@ struct StudyGrid {
 
   // Takes argv[i] (and its value) when it is one of the grid's options:
   // --speeds, --widths, --fractions, --runouts (lists), --seeds N, --quick,
-  // --verbose. Returns false for any other argument.
+  // --verbose, --mill-model FILE. Returns false for any other argument.
   bool take(int argc, char** argv, int& i) {
     const bool more = i + 1 < argc;
     const char* a = argv[i];
@@ -44,6 +52,8 @@ struct StudyGrid {
       fractions = list(argv[++i]);
     } else if (std::strcmp(a, "--runouts") == 0 && more) {
       runouts = list(argv[++i]);
+    } else if (std::strcmp(a, "--mill-model") == 0 && more) {
+      mill_model_file = argv[++i];
     } else if (std::strcmp(a, "--verbose") == 0) {
       verbose = true;
     } else if (std::strcmp(a, "--quick") == 0) {
@@ -51,6 +61,22 @@ struct StudyGrid {
       speeds = {1100, 2500};
       widths = {37};
     } else {
+      return false;
+    }
+    return true;
+  }
+
+  // Loads --mill-model's file into `plant` (nothing without one). False,
+  // after saying why on stderr, when it cannot.
+  bool load_mill_model(smc::config::MillingModel& plant) const {
+    if (mill_model_file.empty()) return true;
+    try {
+      smc::documents::load(mill_model_file, plant);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr,
+                   "--mill-model: %s (a MillingModel in text format, e.g. "
+                   "cell/models/paper_face_mill_mismatched.textproto)\n",
+                   e.what());
       return false;
     }
     return true;

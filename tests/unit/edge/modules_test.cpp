@@ -451,6 +451,153 @@ TEST(AutomaticChatterDetector, NoDecisionBelowTheRmsFloor) {
   EXPECT_EQ(s.chatter_ratio, 0);
 }
 
+namespace {
+
+// One revolution at 1500 rpm through E with the wideband F_y channel: F_z and
+// F_y each a tooth harmonic (100 Hz) and, through `runout`, the cutter's
+// spindle orders 7 and 9 (175 and 225 Hz, in E's band, between the tooth
+// harmonics), all repeating every revolution; F_y also `chatter` N at 640 Hz
+// (near the tool's y mode), not a spindle order. `k0` counts samples across
+// revolutions, so that the chatter runs on from one to the next. `wide`
+// false: a sensor without the wideband channel (NaN).
+Signals wide_revolution(AutomaticChatterDetector& e, const EdgeParameters& p, int& k0,
+                        double runout, double chatter, bool wide = true) {
+  Signals s;
+  s.spindle_rpm = 1500;
+  s.engagement = 1;
+  s.revolution_samples = p.samples_per_revolution;
+  for (int k = 0; k < p.samples_per_revolution; ++k, ++k0) {
+    const double t = k0 * p.sample_period_s;
+    auto wave = [&](double hz, double phase) {
+      return std::sin(2 * std::numbers::pi * hz * t + phase);
+    };
+    const double orders = runout * (wave(175, 0.3) + wave(225, 1.1));
+    s.sample.f_z_n = 300 + 80 * wave(100, 0) + orders;
+    s.sample.f_y_wide_n =
+        wide ? 400 + 150 * wave(100, 0.5) + orders + chatter * wave(640, 0.2) : std::nan("");
+    e.on_sample(s);
+  }
+  e.update(s);
+  return s;
+}
+
+// The paper mill's y modes (cell/models/paper_face_mill.textproto), as the
+// shipped configurations give them to E.
+EdgeParameters with_y_modes(EdgeParameters p) {
+  p.vibration_mode_count = 2;
+  p.vibration_modes[0] = {4100, 0.11, 14000};
+  p.vibration_modes[1] = {2100, 0.22, 9500};
+  return p;
+}
+
+}  // namespace
+
+// Runout puts F_z energy at spindle orders between the tooth harmonics, which
+// S (one revolution's spectrum, whose bins are the spindle orders) counts as
+// chatter. The vibration estimate repeats every revolution and cancels: with
+// the wideband channel E does not fire on it; without, S alone does.
+TEST(AutomaticChatterDetector, WithTheWidebandChannelRunoutIsNotChatter) {
+  const EdgeParameters p = with_y_modes(params());
+  AutomaticChatterDetector e;
+  e.configure(p);
+  int k0 = 0;
+  double most_q = 0;
+  for (int r = 0; r < 20; ++r) {
+    const Signals s = wide_revolution(e, p, k0, 50, 0);
+    if (r >= 2) {
+      EXPECT_GT(s.chatter_ratio, p.chatter_threshold) << "revolution " << r;
+      EXPECT_LT(s.chatter_ratio, p.chatter_vibration_backup) << "revolution " << r;
+    }
+    if (r >= 3) {
+      EXPECT_GT(s.chatter_vibration_ratio, 0) << "judged from the third revolution";
+    }
+    most_q = std::max(most_q, s.chatter_vibration_ratio);
+    ASSERT_FALSE(s.chatter_detected) << "revolution " << r;
+  }
+  EXPECT_LT(most_q, 0.01);
+
+  // The same cut on a sensor without the channel: S alone, and it fires.
+  AutomaticChatterDetector alone;
+  alone.configure(p);
+  k0 = 0;
+  Signals s;
+  for (int r = 0; r < 3; ++r) s = wide_revolution(alone, p, k0, 50, 0, false);
+  EXPECT_EQ(s.chatter_vibration_ratio, 0) << "no estimate without the channel";
+  EXPECT_TRUE(s.chatter_detected);
+}
+
+// Chatter grows from one revolution to the next at a frequency that is not a
+// spindle order: the estimate's change rises with it, and E fires within
+// three revolutions of its passing the rise threshold, not before it grows.
+TEST(AutomaticChatterDetector, AGrowingVibrationIsChatterWithinThreeRevolutions) {
+  const EdgeParameters p = with_y_modes(params());
+  AutomaticChatterDetector e;
+  e.configure(p);
+  int k0 = 0;
+  for (int r = 0; r < 6; ++r) {
+    ASSERT_FALSE(wide_revolution(e, p, k0, 20, 0).chatter_detected) << "revolution " << r;
+  }
+  int crossed = -1, fired = -1;
+  double amplitude = 2;
+  for (int r = 0; r < 12 && fired < 0; ++r, amplitude *= 1.6) {
+    const Signals s = wide_revolution(e, p, k0, 20, amplitude);
+    if (crossed < 0 && s.chatter_vibration_ratio > p.chatter_vibration_rise) crossed = r;
+    if (s.chatter_detected) fired = r;
+  }
+  ASSERT_GE(crossed, 1) << "the chatter starts small";
+  ASSERT_GE(fired, 0) << "never detected";
+  EXPECT_LE(fired - crossed, 3);
+  EXPECT_GE(fired, crossed);
+}
+
+// Entering the part, the cut's pattern grows from one revolution to the next,
+// less each time: the estimate's change is large at first and falls, and E
+// does not take it for chatter. A gap in the channel (a NaN sample) starts
+// the comparison again.
+TEST(AutomaticChatterDetector, EnteringThePartTheEstimateFallsAndIsNotChatter) {
+  const EdgeParameters p = with_y_modes(params());
+  AutomaticChatterDetector e;
+  e.configure(p);
+  Signals s;
+  s.spindle_rpm = 1500;
+  s.revolution_samples = p.samples_per_revolution;
+  int k0 = 0;
+  double previous_q = HUGE_VAL;
+  for (int r = 0; r < 16; ++r) {
+    const double share = 1 - std::pow(0.7, r + 1);  // the arc in the part
+    s.engagement = share;
+    for (int k = 0; k < p.samples_per_revolution; ++k, ++k0) {
+      const double t = k0 * p.sample_period_s;
+      const double tooth = std::sin(2 * std::numbers::pi * 100 * t);
+      s.sample.f_z_n = share * (300 + 80 * tooth);
+      s.sample.f_y_wide_n = share * (400 + 150 * tooth) + 0.5 * std::sin(1.7 * k0);
+      e.on_sample(s);
+    }
+    e.update(s);
+    ASSERT_FALSE(s.chatter_detected) << "revolution " << r;
+    if (s.chatter_vibration_ratio > 0) {
+      EXPECT_LT(s.chatter_vibration_ratio, previous_q) << "revolution " << r;
+      previous_q = s.chatter_vibration_ratio;
+    }
+  }
+  EXPECT_LT(previous_q, 0.01);
+  // A bad sample of the channel: no comparison in its revolution and the
+  // next (neither has a whole revolution before it), then judged again.
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < p.samples_per_revolution; ++k, ++k0) {
+      s.sample.f_z_n = 300 + 80 * std::sin(2 * std::numbers::pi * 100 * k0 * p.sample_period_s);
+      s.sample.f_y_wide_n = (r == 0 && k == 5) ? std::nan("") : 400;
+      e.on_sample(s);
+    }
+    e.update(s);
+    if (r < 2) {
+      EXPECT_EQ(s.chatter_vibration_ratio, 0) << "revolution " << r << " after the gap";
+    } else {
+      EXPECT_GT(s.chatter_vibration_ratio, 0) << "judged again";
+    }
+  }
+}
+
 TEST(ChatterSuppression, RewriteThenHoldThenDone) {
   ChatterSuppressionRoutine g;
   ChatterSuppressor f;

@@ -849,7 +849,7 @@ TEST(SmcTwoPlus, NoHeapAllocationThroughASpeedChangeAndABreakage) {
   EdgeEvent ev;
   RevolutionRecord rev;
   ForceBatchRecord batch;
-  bool changed = false, broken = false;
+  bool changed = false, broken = false, estimated = false;
   double lowest_reference = 1e9, highest_reference = 0;
   smc::test::ForbidAllocations guard;
   for (int i = 0; i < 28000; ++i) {  // 14 s
@@ -859,6 +859,7 @@ TEST(SmcTwoPlus, NoHeapAllocationThroughASpeedChangeAndABreakage) {
       broken = broken || ev.kind == EventKind::kToolBroken;
     }
     while (core.revolutions().try_pop(rev)) {
+      estimated = estimated || rev.chatter_vibration_ratio > 0;  // E's vibration estimate ran
       if (rev.contact && !changed) {
         lowest_reference = std::min(lowest_reference, rev.f_ref_n);
         highest_reference = std::max(highest_reference, rev.f_ref_n);
@@ -870,6 +871,7 @@ TEST(SmcTwoPlus, NoHeapAllocationThroughASpeedChangeAndABreakage) {
   const uint64_t violations = guard.violations();
   EXPECT_TRUE(changed);
   EXPECT_TRUE(broken);
+  EXPECT_TRUE(estimated);
   EXPECT_EQ(violations, 0u);
   EXPECT_LT(lowest_reference, 0.65 * highest_reference) << "the identification segment ran";
 }

@@ -2,7 +2,9 @@
 // The supervisory modules of the paper's Table 1. Each is a plain object stepped
 // by the edge core; see module.hpp for the real-time contract.
 
+#include <array>
 #include <complex>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -74,12 +76,21 @@ class OperatorChatterDetector final : public Module {
 // revolution, as long as the core's revolution clock (the measured spindle
 // speed) makes it, and computes their spectrum (Eigen's FFT). Chatter energy is the
 // energy in the search band outside a guard band around each tooth-passing
-// harmonic; the statistic is its share of the total AC energy. d is set when
-// the statistic exceeds the threshold for `chatter_confirm_revolutions`
-// consecutive judged revolutions and stays set until reset. A revolution
-// whose mean F_z moved by more than a tenth, or while the drive's engagement
-// is below the most it reached since it last rose (the cutter leaving the
-// part; NaN: unknown, judged), is not judged.
+// harmonic; the statistic S is its share of the total AC energy. A
+// revolution whose mean F_z moved by more than a tenth, or while the drive's
+// engagement is below the most it reached since it last rose (the cutter
+// leaving the part; NaN: unknown, judged), is not judged on S.
+//
+// Where the sensor has a wideband F_y channel (ForceSample::f_y_wide_n) and
+// the configuration the machine's y modes, E also estimates the tool-part
+// vibration v from it, sample by sample, through those modes, and judges
+// q = RMS(v_k - v_{k-1}) / RMS(v_k) over each revolution, the revolution
+// before taken at the same spindle angle (interpolated between samples):
+// runout repeats and cancels, and the structure smooths the entry's edges
+// out of v. d is then set by the rules of Parameters::chatter_vibration_*
+// (q rising past `rise`, q above `level`, or S above `backup`); without the
+// channel, by S above `chatter_threshold` in `chatter_confirm_revolutions`
+// consecutive judged revolutions. It stays set until reset.
 class AutomaticChatterDetector final : public Module {
  public:
   AutomaticChatterDetector();
@@ -93,9 +104,16 @@ class AutomaticChatterDetector final : public Module {
     s.chatter_detected = false;
     s.chatter_ratio = 0;
     s.chatter_frequency_hz = 0;
+    s.chatter_vibration_ratio = 0;
   }
   Status on_sample(Signals& s) noexcept override;
   Status update(Signals& s) noexcept override;
+
+  // q for the revolution that ended with the last sample, `samples` long,
+  // against the one before at `period_samples` (the measured speed's
+  // revolution in samples); NaN when the estimate does not cover both.
+  // Real-time safe after configure().
+  double vibration_ratio(int samples, double period_samples) const noexcept;
 
   // The statistic for the first `samples` samples of the buffer: one
   // revolution (also used by tests and the detector study). 0 for a count
@@ -114,6 +132,24 @@ class AutomaticChatterDetector final : public Module {
   double last_engagement_ = 0;  // the drive's, at the last revolution (NaN: unknown)
   double most_engaged_ = 0;     // and the most it reached since it last rose
   static constexpr double kMaxMeanChange = 0.1;
+  static constexpr int kVibrationConfirm = 3;  // `level` and `backup`: revolutions in a row
+
+  // The vibration estimate: per y mode its exact zero-order-hold
+  // discretisation at the sample period and its state (displacement q in mm,
+  // velocity w), driven by the wideband F_y; their sum, the estimate, kept
+  // in a ring of two revolutions and a little more.
+  struct VibrationMode {
+    double p11 = 1, p12 = 0, p21 = 0, p22 = 1, g1 = 0, g2 = 0;
+    double q = 0, w = 0;
+  };
+  std::array<VibrationMode, EdgeParameters::kMaxVibrationModes> modes_{};
+  int mode_count_ = 0;
+  std::vector<double> vibration_;  // the ring
+  uint64_t vibration_at_ = 0;      // samples written to it
+  uint64_t vibration_run_ = 0;     // of which the last ones in an unbroken run
+  bool wide_channel_ = false;      // a finite wideband F_y since the last revolution
+  double q1_ = 0, q2_ = 0;         // q of the last two judged revolutions (NaN: none)
+  int q_above_ = 0;                // judged revolutions in a row with q above `level`
 };
 
 // G: chatter suppression routine: run F (the core rewrites the program),

@@ -4,9 +4,10 @@
 // recording already happened); a rewrite is acknowledged and recorded.
 //
 // CSV: a header naming the columns, then one row per sample. Required:
-// t_s, f_y_n, f_z_n. Optional: f_x_n, x_mm, depth_mm, spindle_rpm,
-// feedrate_mm_s, pass_index, in_pass (0/1). Missing optional columns take
-// the program's values. `smc-edge simulate` writes files in this format.
+// t_s, f_y_n, f_z_n. Optional: f_x_n, f_y_wide_n (ForceSample; absent: NaN),
+// x_mm, depth_mm, spindle_rpm, feedrate_mm_s, pass_index, in_pass (0/1).
+// Missing optional columns take the program's values. `smc-edge simulate` writes files in this
+// format.
 
 #include <string>
 #include <vector>
@@ -31,7 +32,7 @@ class ReplayDrive final : public Drive {
 
  private:
   struct Row {
-    double t_s, f_x_n, f_y_n, f_z_n, x_mm, depth_mm, spindle_rpm, feedrate_mm_s;
+    double t_s, f_x_n, f_y_n, f_z_n, f_y_wide_n, x_mm, depth_mm, spindle_rpm, feedrate_mm_s;
     int pass_index;
     bool in_pass;
   };

@@ -43,6 +43,7 @@ struct TraceSample {
   double x_mm;
   double f_y_n;
   double f_z_n;
+  double f_y_wide_n;  // NaN: the drive has no wideband F_y channel
   double f_y_peak_n;
   double f_ref_n;
   double feedrate_mm_s;

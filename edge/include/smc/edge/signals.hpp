@@ -21,7 +21,8 @@ enum class Signal : uint32_t {
   kChatterSignalled = 1u << 1,  // D: chatter_signalled
   kForcePeak = 1u << 2,         // I: f_y_peak_n, revolutions, f_y_updated
   kContact = 1u << 3,           // J: contact
-  kChatterDetected = 1u << 4,   // E: chatter_detected, chatter_ratio, chatter_frequency_hz
+  kChatterDetected = 1u << 4,   // E: chatter_detected, chatter_ratio, chatter_frequency_hz,
+                                //    chatter_vibration_ratio
   kSuppression = 1u << 5,       // G: rewrite_requests, suppression_hold, suppression_done
   kProgramRewritten = 1u << 6,  // F: program_rewritten
   kGainEstimate = 1u << 7,      // H: gain_estimate, gain_valid
@@ -85,6 +86,9 @@ struct Signals {
   bool chatter_detected = false;    // receptivity d (latched until E is reset)
   double chatter_ratio = 0;         // non-harmonic / total F_z energy, last revolution
   double chatter_frequency_hz = 0;  // strongest non-harmonic component
+  // The estimated vibration's change from the revolution before over its
+  // RMS, last revolution (0: not judged, or no estimate)
+  double chatter_vibration_ratio = 0;
   // --- G chatter suppression routine (with F)
   uint32_t rewrite_requests = 0;   // G: requests to run F so far (F serves each once)
   bool suppression_hold = false;   // G holds the feed

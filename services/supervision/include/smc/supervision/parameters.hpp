@@ -98,6 +98,30 @@ struct Parameters {
   // looks for the tooth that took a broken tooth's chip within as many
   // windows as this arc spans.
   double cut_arc_rad = 0;
+  // The machine's structure in y (milling_model.structure: tool_y, then
+  // part_y; both move the tool against the part under the same force), for
+  // module E's estimate of the tool-part vibration from the wideband F_y
+  // channel (edge/README.md, module E). None: E judges F_z alone.
+  struct VibrationMode {
+    double natural_frequency_rad_s = 0;
+    double damping_ratio = 0;
+    double stiffness_n_per_mm = 0;
+  };
+  static constexpr int kMaxVibrationModes = 4;
+  VibrationMode vibration_modes[kMaxVibrationModes] = {};
+  int vibration_mode_count = 0;
+  // Module E's rules on the estimated vibration's change from one revolution
+  // to the next (not in the configuration message: the detector study's
+  // values; the study overrides them to try others). Chatter when it exceeds
+  // `rise` and grows over two judged revolutions in a row, the last more
+  // than `growth` x the one two before; or exceeds `level` in three in a
+  // row; or when F_z's non-harmonic share exceeds `backup` in three (chatter
+  // locked to a spindle harmonic repeats every revolution, and only F_z's
+  // spectrum shows it once grown).
+  double chatter_vibration_rise = 0.15;
+  double chatter_vibration_growth = 1.5;
+  double chatter_vibration_level = 0.8;
+  double chatter_vibration_backup = 0.7;
 
   // Derived, in samples.
   int samples_per_fast = 0;
