@@ -87,7 +87,10 @@ class OperatorChatterDetector final : public Module {
 // q = RMS(v_k - v_{k-1}) / RMS(v_k) over each revolution, the revolution
 // before taken at the same spindle angle (interpolated between samples):
 // runout repeats and cancels, and the structure smooths the entry's edges
-// out of v. d is then set by the rules of Parameters::chatter_vibration_*
+// out of v. q is not judged while the cutter leaves the part, across a gap
+// in the channel, or across a step in the cut (the mean F_z rising more
+// than a tenth beyond the engagement's rise). d is then set by the rules of
+// Parameters::chatter_vibration_*
 // (q rising past `rise`, q above `level`, or S above `backup`); without the
 // channel, by S above `chatter_threshold` in `chatter_confirm_revolutions`
 // consecutive judged revolutions. It stays set until reset.
