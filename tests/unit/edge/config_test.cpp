@@ -125,6 +125,34 @@ TEST(ReplayDrive, MalformedRowsNameFileLineAndColumn) {
   std::remove(path.c_str());
 }
 
+// The wideband F_y channel (module E's vibration estimate) is an optional
+// column, as `smc-edge simulate` writes it; without it the drive has no such
+// channel (NaN), and E judges F_z alone.
+TEST(ReplayDrive, TheWidebandFyColumnIsOptional) {
+  const std::string with = ::testing::TempDir() + "/replay_wide.csv";
+  const std::string without = ::testing::TempDir() + "/replay_narrow.csv";
+  {
+    std::ofstream f(with);
+    f << "t_s,f_y_n,f_z_n,f_y_wide_n\n0.0005,10,20,11.5\n";
+    std::ofstream g(without);
+    g << "t_s,f_y_n,f_z_n\n0.0005,10,20\n";
+  }
+  FixedProgram p;
+  p.count = 1;
+  p.passes[0] = {2, 10, 1500};
+  DriveSample s;
+  ReplayDrive a(with, 0.0005);
+  a.load(p);
+  ASSERT_EQ(a.step(0, s), Status::kOk);
+  EXPECT_EQ(s.force.f_y_wide_n, 11.5);
+  ReplayDrive b(without, 0.0005);
+  b.load(p);
+  ASSERT_EQ(b.step(0, s), Status::kOk);
+  EXPECT_TRUE(std::isnan(s.force.f_y_wide_n));
+  std::remove(with.c_str());
+  std::remove(without.c_str());
+}
+
 TEST(ReplayDrive, PlaysSamplesInOrderAndKeepsNaNForTheCore) {
   const std::string path = ::testing::TempDir() + "/replay_ok.csv";
   {

@@ -74,6 +74,19 @@ TEST(Parameters, TheCuttersArcOverThePartComesFromTheWorkpiece) {
   EXPECT_EQ(sv::parameters_from_config(cfg).cut_arc_rad, 0.0);
 }
 
+// Module E's vibration estimate takes the milling model's y modes (tool_y,
+// then part_y); a mode it cannot use is refused, naming the field.
+TEST(Parameters, TheYModesComeFromTheStructureAndABadOneIsRefused) {
+  auto cfg = shipped("smc2.textproto");
+  const auto p = sv::parameters_from_config(cfg);
+  ASSERT_EQ(p.vibration_mode_count, 2);
+  EXPECT_EQ(p.vibration_modes[0].natural_frequency_rad_s, 4100);  // tool_y
+  EXPECT_EQ(p.vibration_modes[1].natural_frequency_rad_s, 2100);  // part_y
+  cfg.mutable_milling_model()->mutable_structure()->mutable_tool_y(0)->set_damping_ratio(0);
+  const std::string why = refusal(cfg);
+  EXPECT_NE(why.find("milling_model.structure.tool_y[0].damping_ratio"), std::string::npos) << why;
+}
+
 TEST(Validate, ShippedConfigurationsAreValidAndCarryTheirBoundGrafcet) {
   for (const char* name :
        {"no_control.textproto", "smc1.textproto", "smc1_guarded.textproto", "smc2.textproto"}) {
