@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <limits>
+#include <numbers>
 #include <unsupported/Eigen/FFT>
 
 #include "smc/edge/modules.hpp"
@@ -48,6 +50,8 @@ void AutomaticChatterDetector::configure(const EdgeParameters& p) {
     v = VibrationMode{d.p11, d.p12, d.p21, d.p22, d.g1, d.g2, 0, 0};
   }
   vibration_.assign(mode_count_ > 0 ? 2 * most + 4 : 0, 0.0);
+  vibration_buffer_.assign(mode_count_ > 0 ? most : 0, 0.0);
+  vibration_spectrum_.assign(mode_count_ > 0 ? 2 * (most / 2 + 1) : 0, {});
   reset();
 }
 
@@ -60,7 +64,7 @@ void AutomaticChatterDetector::reset() noexcept {
   for (auto& m : modes_) m.q = m.w = 0;
   vibration_at_ = vibration_run_ = 0;
   wide_channel_ = false;
-  q1_ = q2_ = std::numeric_limits<double>::quiet_NaN();
+  q1_ = q2_ = q3_ = std::numeric_limits<double>::quiet_NaN();
   q_above_ = 0;
 }
 
@@ -89,28 +93,66 @@ Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
   return Status::kOk;
 }
 
-double AutomaticChatterDetector::vibration_ratio(int samples,
-                                                 double period_samples) const noexcept {
+double AutomaticChatterDetector::vibration_correction(double frequency_hz) const noexcept {
+  using C = std::complex<double>;
+  const double omega = 2 * std::numbers::pi * frequency_hz;
+  const C s(0, omega);
+  const C z = std::polar(1.0, omega * p_.sample_period_s);
+  C held = 0, structure = 0;
+  for (int i = 0; i < mode_count_; ++i) {
+    const VibrationMode& m = modes_[static_cast<size_t>(i)];
+    const auto& c = p_.vibration_modes[i];
+    const double wn = c.natural_frequency_rad_s;
+    structure += wn * wn / c.stiffness_n_per_mm / (s * s + 2 * c.damping_ratio * wn * s + wn * wn);
+    // First row of (zI - P)^-1 G: the held force's path to the displacement.
+    const C det = (z - m.p11) * (z - m.p22) - m.p12 * m.p21;
+    held += ((z - m.p22) * m.g1 + m.p12 * m.g2) / det;
+  }
+  const double fc = p_.vibration_sensor_cutoff_hz;
+  const double r = fc > 0 ? frequency_hz / fc : 0;
+  const double sensor = 1 / (1 + r * r * r * r);  // |Butterworth|^2, second order
+  const double below = std::norm(held) * sensor;
+  return below > 0 ? std::min(std::norm(structure) / below, kMaxCorrection) : kMaxCorrection;
+}
+
+double AutomaticChatterDetector::vibration_ratio(int samples, double period_samples) noexcept {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (mode_count_ == 0 || samples < 4 || !(period_samples >= 1)) return nan;
+  if (static_cast<size_t>(samples) > vibration_buffer_.size()) return nan;
   // This revolution and the one before, back to the sample before the first
   // one it interpolates, must lie in the unbroken run and in the ring.
   const auto reach = static_cast<uint64_t>(samples) + static_cast<uint64_t>(period_samples) + 2;
   if (reach > vibration_run_ || reach > vibration_.size()) return nan;
   const uint64_t size = vibration_.size();
   auto at = [&](uint64_t k) { return vibration_[static_cast<size_t>(k % size)]; };
-  double change = 0, energy = 0;
+  const auto n = static_cast<size_t>(samples);
+  const size_t bins = n / 2 + 1;
+  std::complex<double>* change = vibration_spectrum_.data();
+  std::complex<double>* now = change + bins;
+  // The change: v at k less v at k - period, between samples k - whole - 1
+  // and k - whole.
   const uint64_t first = vibration_at_ - static_cast<uint64_t>(samples);
   const auto whole = static_cast<uint64_t>(period_samples);
   const double w = period_samples - static_cast<double>(whole);
-  for (uint64_t k = first; k < vibration_at_; ++k) {
-    // v at k - period: between samples k - whole - 1 and k - whole.
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t k = first + i;
     const double before = w > 0 ? w * at(k - whole - 1) + (1 - w) * at(k - whole) : at(k - whole);
-    const double now = at(k);
-    change += (now - before) * (now - before);
-    energy += now * now;
+    vibration_buffer_[i] = at(k) - before;
   }
-  return energy > 0 ? std::sqrt(change / energy) : nan;
+  fft_->fft.fwd(change, vibration_buffer_.data(), static_cast<Eigen::Index>(n));
+  for (size_t i = 0; i < n; ++i) vibration_buffer_[i] = at(first + i);
+  fft_->fft.fwd(now, vibration_buffer_.data(), static_cast<Eigen::Index>(n));
+  // Both energies by Parseval, each bin corrected from what the estimate
+  // passes to what the structure does at that frequency.
+  const double df = 1.0 / (static_cast<double>(n) * p_.sample_period_s);
+  double changed = 0, energy = 0;
+  for (size_t k = 0; k < bins; ++k) {
+    const bool single = k == 0 || (n % 2 == 0 && k == n / 2);
+    const double c = (single ? 1.0 : 2.0) * vibration_correction(static_cast<double>(k) * df);
+    changed += c * std::norm(change[k]);
+    energy += c * std::norm(now[k]);
+  }
+  return energy > 0 ? std::sqrt(changed / energy) : nan;
 }
 
 double AutomaticChatterDetector::statistic(int samples, double spindle_rpm,
@@ -168,7 +210,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   if (samples != s.revolution_samples) {
     vibration_run_ = 0;
     wide_channel_ = false;
-    q1_ = q2_ = std::numeric_limits<double>::quiet_NaN();
+    q1_ = q2_ = q3_ = std::numeric_limits<double>::quiet_NaN();
     q_above_ = 0;
     return Status::kOk;
   }
@@ -218,17 +260,23 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
     const double q = vibration_ratio(samples, period);
     if (std::isfinite(q) && !leaving && !stepped) {
       s.chatter_vibration_ratio = q;
-      // Rising past `rise` over two judged revolutions in a row, the last
-      // clearly above the one two before (noise alone rises twice in a row
-      // often enough at the small feeds' floor); or high three in a row.
-      const bool rising = q1_ > p_.chatter_vibration_rise && q1_ > q2_ && q > q1_ &&
-                          q > p_.chatter_vibration_growth * q2_;
+      // Above `rise` and rising, then rising again (the onset's own
+      // pattern); above `climb` and rising three times in a row (slower
+      // growth, from lower, needs one revolution more of it); or high three
+      // in a row. A rise is by more than `growth` (q's own error from one
+      // revolution to the next is a few per cent). NaN (no judged revolution
+      // there) compares false.
+      const double g = p_.chatter_vibration_growth;
+      const bool rising = q1_ > p_.chatter_vibration_rise && q1_ > g * q2_ && q > g * q1_;
+      const bool climbing =
+          q2_ > p_.chatter_vibration_climb && q2_ > g * q3_ && q1_ > g * q2_ && q > g * q1_;
       q_above_ = q > p_.chatter_vibration_level ? q_above_ + 1 : 0;
-      if (rising || q_above_ >= kVibrationConfirm) s.chatter_detected = true;
+      if (rising || climbing || q_above_ >= kVibrationConfirm) s.chatter_detected = true;
+      q3_ = q2_;
       q2_ = q1_;
       q1_ = q;
     } else {
-      q1_ = q2_ = std::numeric_limits<double>::quiet_NaN();
+      q1_ = q2_ = q3_ = std::numeric_limits<double>::quiet_NaN();
       q_above_ = 0;
     }
   }

@@ -182,6 +182,9 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   p.speed_change_timeout_s =
       or_default("speed_change_timeout_s", op.speed_change_timeout_s(), 5.0, 0.01, 60.0,
                  "set the time the spindle has to reach a new speed, e.g. 5 (0: default)");
+  p.vibration_sensor_cutoff_hz =
+      or_default("wideband_cutoff_hz", op.wideband_cutoff_hz(), 1000.0, 1.0, 1e6,
+                 "set the wideband F_y channel's anti-alias cut-off, e.g. 1000 (0: default)");
   if (op.identification_levels_size() > Parameters::kMaxIdentificationLevels) {
     o.fail("identification_levels", "has more levels than the edge holds",
            op.identification_levels_size(), "give at most 4 levels, e.g. [0.6, 0.8]");

@@ -4,7 +4,7 @@
 //   build/release/bin/smc-bench-chatter-detector [--seeds N] [--speeds 750,1100,...]
 //       [--widths 25,37,50] [--fractions 0.3,0.6,0.9,1.3,1.8] [--runouts 0,10,20]
 //       [--quick] [--verbose] [--dump FILE.csv] [--dump-samples STEM]
-//       [--force-only] [--vibration-rise X] [--vibration-growth X]
+//       [--force-only] [--vibration-rise X] [--vibration-climb X] [--vibration-growth X]
 //       [--vibration-level X] [--vibration-backup X] [--mill-model FILE]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
@@ -13,8 +13,13 @@
 // the pass depths are the given fractions of it; each cut is run with every
 // cutter runout given (um, eccentric mounting: services/machining README,
 // "Runout"; the critical depth is the runout-free one). Whether a cut is stable is
-// decided from the simulated vibration, independently of E (the run
-// summary's chatter onset): stable cuts give the false-alarm figures
+// decided from the simulated vibration, independently of E: each cut runs
+// twice, first with E's rules switched off, whose run summary's chatter
+// onset labels it, then with E as it ships, whose first detection is what E
+// decides before anything reacts. (Labelled from the second run, a false
+// detection would make its own onset: the summary takes a rising
+// revolution followed by the hold that reacts to it as the start of
+// chatter.) Stable cuts give the false-alarm figures
 // (revolutions in the cut whose statistic exceeded the threshold, confirmed
 // detections, the largest statistic), unstable cuts the delay from the onset
 // to E's detection, in revolutions. E judges the vibration it estimates
@@ -25,12 +30,12 @@
 // model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
 // critical depths keep the configuration's. Progress goes to stderr. --dump writes
-// every revolution E judged or skipped in contact (statistic, engagement,
-// feed) with its run's onset, to try other decision rules offline: what
-// happens before E's first detection does not depend on the rule (run with
-// --threshold 1 so that E never fires: it also switches the vibration
-// rules off). --dump-samples STEM writes every
-// run's samples and revolutions, to try other statistics offline:
+// every revolution of the labelling run (E's rules off) that E judged or
+// skipped in contact (statistic, q, engagement, feed) with its onset, to
+// try other decision rules offline: what happens before E's first
+// detection does not depend on the rule. --threshold 1 switches E's rules
+// off in both runs (and runs each cut once). --dump-samples STEM writes
+// the labelling run's samples and revolutions, to try other statistics offline:
 // STEM.runs.csv (one line per run: its grid point, onset and detection
 // times, and where its records start in the two binary files and how many
 // there are), STEM.samples.bin (25-byte records, little-endian: t_s f64,
@@ -80,7 +85,7 @@ int main(int argc, char** argv) {
   double threshold_override = 0;
   int confirm_override = 0;
   bool force_only = false;
-  double rise = -1, growth = -1, level = -1, backup = -1;  // < 0: the shipped values
+  double rise = -1, climb = -1, growth = -1, level = -1, backup = -1;  // < 0: the shipped values
   std::FILE* dump = nullptr;
   std::FILE* raw_runs = nullptr;
   std::FILE* raw_samples = nullptr;
@@ -95,6 +100,8 @@ int main(int argc, char** argv) {
       force_only = true;
     } else if (std::strcmp(argv[i], "--vibration-rise") == 0 && more) {
       rise = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-climb") == 0 && more) {
+      climb = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-growth") == 0 && more) {
       growth = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-level") == 0 && more) {
@@ -129,7 +136,8 @@ int main(int argc, char** argv) {
                    "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
                    "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose] "
                    "[--dump FILE.csv] [--dump-samples STEM] [--force-only] [--vibration-rise X] "
-                   "[--vibration-growth X] [--vibration-level X] [--vibration-backup X] "
+                   "[--vibration-climb X] [--vibration-growth X] "
+                   "[--vibration-level X] [--vibration-backup X] "
                    "[--mill-model FILE]\n",
                    argv[0]);
       return 2;
@@ -158,13 +166,30 @@ int main(int argc, char** argv) {
   auto tune = [&](EdgeParameters& ep) {
     if (force_only) ep.vibration_mode_count = 0;
     if (rise >= 0) ep.chatter_vibration_rise = rise;
+    if (climb >= 0) ep.chatter_vibration_climb = climb;
     if (growth >= 0) ep.chatter_vibration_growth = growth;
     if (level >= 0) ep.chatter_vibration_level = level;
     if (backup >= 0) ep.chatter_vibration_backup = backup;
-    if (threshold_override >= 1) {  // E never fires
-      ep.chatter_vibration_rise = ep.chatter_vibration_level = HUGE_VAL;
-      ep.chatter_vibration_backup = 2;  // S is a share: at most 1
-    }
+  };
+  // E's rules off: the run that labels a cut.
+  const bool e_muted = threshold_override >= 1;
+  auto mute = [](EdgeParameters& ep) {
+    ep.chatter_vibration_rise = ep.chatter_vibration_climb = ep.chatter_vibration_level = HUGE_VAL;
+    ep.chatter_vibration_backup = ep.chatter_threshold = 2;  // S is a share: at most 1
+  };
+  // One cut on the simulated mill, E listening or not.
+  auto cut = [&](const smc::config::SupervisorConfig& raw,
+                 const smc::config::MillingModel& mill_msg, bool listening, RunResult& run) {
+    EdgeConfig cfg = edge_config_from_proto(raw);
+    tune(cfg.params);
+    if (!listening) mute(cfg.params);
+    SimulatedMill mill(mill_msg, raw.simulation(), cfg.params.sample_period_s);
+    EdgeCore core(cfg, mill);
+    core.start();
+    RunOptions opts;
+    opts.max_time_s = 120;
+    run = run_virtual(core, opts);
+    return summarize(core, run);
   };
   EdgeParameters shown = edge_config_from_proto(base).params;
   tune(shown);
@@ -173,11 +198,13 @@ int main(int argc, char** argv) {
   const double threshold = estimate ? shown.chatter_vibration_backup : shown.chatter_threshold;
   if (estimate) {
     std::printf(
-        "module E: the vibration estimated from the wideband F_y through %d y modes, q = "
-        "RMS(v_k - v_k-1) / RMS(v_k): chatter when q rises past %.2f over two revolutions in a "
-        "row (the last above %.2f x the one two before), or exceeds %.2f in 3; or when S, the "
+        "module E: the vibration estimated from the wideband F_y through %d y modes (the "
+        "channel's %.0f Hz filter undone), q = RMS(v_k - v_k-1) / RMS(v_k): chatter when q "
+        "exceeds %.2f and rises, then rises again, or exceeds %.2f and rises three times in a "
+        "row (each rise by more than x%.2f), or exceeds %.2f in 3; or when S, the "
         "non-harmonic share of F_z energy, exceeds %.2f in 3",
-        shown.vibration_mode_count, shown.chatter_vibration_rise, shown.chatter_vibration_growth,
+        shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz, shown.chatter_vibration_rise,
+        shown.chatter_vibration_climb, shown.chatter_vibration_growth,
         shown.chatter_vibration_level, shown.chatter_vibration_backup);
   } else {
     std::printf(
@@ -233,33 +260,36 @@ int main(int argc, char** argv) {
             pass->set_feedrate_mm_s(fpt * raw.operation().teeth() * rpm / 60.0);
             raw.mutable_program()->set_total_depth_mm(depth);
             raw.mutable_simulation()->set_seed(static_cast<uint64_t>(seed));
-            EdgeConfig cfg = edge_config_from_proto(raw);
-            tune(cfg.params);
             // The mill that cuts: the configuration's model, or --mill-model's
             // with this cutter (runout) and part (width).
             auto mill_msg = raw.milling_model();
             if (!mill_model_file.empty()) use_plant_model(mill_msg, plant);
-            SimulatedMill mill(mill_msg, raw.simulation(), cfg.params.sample_period_s);
-            EdgeCore core(cfg, mill);
-            core.start();
-            RunOptions opts;
-            opts.max_time_s = 120;
-            RunResult run = run_virtual(core, opts);
-            const auto s = summarize(core, run);
+            // The cut twice: with E's rules off, which labels it (the onset
+            // from the vibration, nothing reacting to it), then with E
+            // listening, whose first detection is what it decides before
+            // anything reacts (its state up to then does not depend on the
+            // reaction). Labelled from the listening run instead, a
+            // detection would make its own onset: the summary's onset takes
+            // a rising revolution followed by a hold as the start of chatter.
+            RunResult labelled, heard;
+            const auto label = cut(raw, mill_msg, false, labelled);
+            const auto s = e_muted ? label : cut(raw, mill_msg, true, heard);
+            const RunResult& run = e_muted ? labelled : heard;
+            const double onset = label.chatter_onset_s();
             const double first_detection = s.chatter_detected_s();
             ++run_id;
             if (dump != nullptr) {
-              for (const auto& r : run.revolutions) {
+              for (const auto& r : labelled.revolutions) {
                 if ((r.active & bit(ModuleId::E)) == 0 || !r.contact) continue;
                 std::fprintf(dump, "%d,%.0f,%.0f,%.0f,%.2f,%d,%.4f,%.4f,%.5f,%.5f,%.4f,%.5f\n",
-                             run_id, rpm, width, runout, fraction, seed, s.chatter_onset_s(), r.t_s,
+                             run_id, rpm, width, runout, fraction, seed, onset, r.t_s,
                              r.chatter_ratio, r.chatter_vibration_ratio, r.engagement_min,
                              r.feed_per_tooth_mm);
               }
             }
             if (raw_runs != nullptr) {
               uint64_t ns = 0, nr = 0;
-              for (const auto& t : run.samples) {
+              for (const auto& t : labelled.samples) {
                 const float v[4] = {
                     static_cast<float>(t.f_z_n), static_cast<float>(t.feedrate_mm_s),
                     static_cast<float>(t.vibration_y_mm), static_cast<float>(t.f_y_wide_n)};
@@ -270,7 +300,7 @@ int main(int argc, char** argv) {
                 std::fwrite(&flags, 1, 1, raw_samples);
                 ++ns;
               }
-              for (const auto& r : run.revolutions) {
+              for (const auto& r : labelled.revolutions) {
                 const float v[2] = {static_cast<float>(r.chatter_ratio),
                                     static_cast<float>(r.feed_per_tooth_mm)};
                 const uint8_t flags = (r.contact ? 1 : 0) | ((r.active & bit(ModuleId::E)) ? 2 : 0);
@@ -280,8 +310,8 @@ int main(int argc, char** argv) {
                 ++nr;
               }
               std::fprintf(raw_runs, "%d,%.0f,%.0f,%.0f,%.2f,%d,%.6f,%.6f,%llu,%llu,%llu,%llu\n",
-                           run_id, rpm, width, runout, fraction, seed, s.chatter_onset_s(),
-                           first_detection, static_cast<unsigned long long>(raw_sample_at),
+                           run_id, rpm, width, runout, fraction, seed, onset, first_detection,
+                           static_cast<unsigned long long>(raw_sample_at),
                            static_cast<unsigned long long>(ns),
                            static_cast<unsigned long long>(raw_rev_at),
                            static_cast<unsigned long long>(nr));
@@ -309,11 +339,11 @@ int main(int argc, char** argv) {
             if (verbose) {
               std::fprintf(stderr,
                            "\n  depth %.2f seed %d: onset %.3f s, detected %.3f s, %llu revs, max "
-                           "statistic %.3f, %u passes\n",
-                           depth, seed, s.chatter_onset_s(), first_detection,
-                           static_cast<unsigned long long>(revs), max_ratio, core.program().count);
+                           "statistic %.3f, %d passes\n",
+                           depth, seed, onset, first_detection,
+                           static_cast<unsigned long long>(revs), max_ratio, s.passes_size());
             }
-            if (s.chatter_onset_s() < 0) {
+            if (onset < 0) {
               ++c.stable_runs;
               c.stable_revs += revs;
               c.exceed += exceed;
@@ -324,7 +354,7 @@ int main(int argc, char** argv) {
               ++c.unstable_runs;
               if (first_detection >= 0) {
                 ++c.detected;
-                const double delay = (first_detection - s.chatter_onset_s()) * rpm / 60.0;
+                const double delay = (first_detection - onset) * rpm / 60.0;
                 c.worst_delay_revs = std::max(c.worst_delay_revs, delay);
                 if (delay <= 3.0) ++c.within3;
                 c.unstable_min_peak = std::min(c.unstable_min_peak, max_ratio);

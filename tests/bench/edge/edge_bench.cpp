@@ -8,6 +8,10 @@
 //    no-control core measured in the same run.
 //  - BM_VirtualRun/<config>: a whole run with the simulated mill in virtual
 //    time; "x_real_time" is machine seconds per wall-clock second.
+//  - BM_ChatterRevolution/<rpm>/<estimate>: module E's work for one
+//    revolution (its samples and its decision) at that speed, with S alone
+//    (0) or with the vibration estimate and its spectral correction (1);
+//    "budget_pct": that work as a share of the revolution's duration.
 //
 //   build/release/bin/smc-bench-edge [--benchmark_filter=...]
 
@@ -15,11 +19,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <vector>
 
 #include "smc/documents/load.hpp"
 #include "smc/edge/core.hpp"
+#include "smc/edge/modules.hpp"
 #include "smc/edge/runner.hpp"
 #include "smc/edge/sim_mill.hpp"
 #include "smc_config.pb.h"
@@ -127,11 +133,49 @@ void virtual_run(benchmark::State& state, const char* name) {
   state.counters["x_real_time"] = benchmark::Counter(machine_s, benchmark::Counter::kIsRate);
 }
 
+// One revolution of a cut with chatter at `rpm` through E: a tooth harmonic
+// and a 737 Hz tone in F_z and in the wideband F_y.
+void chatter_revolution(benchmark::State& state) {
+  const double rpm = static_cast<double>(state.range(0));
+  EdgeParameters p = edge_config_from_proto(config("smc2.textproto")).params;
+  if (state.range(1) == 0) p.vibration_mode_count = 0;
+  AutomaticChatterDetector e;
+  e.configure(p);
+  Signals s;
+  s.spindle_rpm = rpm;
+  s.engagement = 1;
+  const auto n = static_cast<int>(60.0 / rpm / p.sample_period_s);
+  s.revolution_samples = n;
+  constexpr double kPi = 3.14159265358979323846;
+  uint64_t k = 0;
+  for (auto _ : state) {
+    for (int i = 0; i < n; ++i, ++k) {
+      const double t = static_cast<double>(k) * p.sample_period_s;
+      const double tooth = std::sin(2 * kPi * 4 * rpm / 60 * t);
+      const double chatter = std::sin(2 * kPi * 737 * t);
+      s.sample.f_z_n = 300 + 80 * tooth + 20 * chatter;
+      s.sample.f_y_wide_n = 400 + 150 * tooth + 20 * chatter;
+      e.on_sample(s);
+    }
+    e.update(s);
+    e.clear_outputs(s);
+    benchmark::DoNotOptimize(s.chatter_vibration_ratio);
+  }
+  state.counters["budget_pct"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * 60.0 / rpm / 100.0,
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
 }  // namespace
 
 BENCHMARK_CAPTURE(tick_modules, no_control, "no_control.textproto");
 BENCHMARK_CAPTURE(tick_modules, smc1, "smc1.textproto");
 BENCHMARK_CAPTURE(tick_modules, smc2, "smc2.textproto");
 BENCHMARK_CAPTURE(virtual_run, smc2, "smc2.textproto")->Unit(benchmark::kSecond)->Iterations(2);
+
+BENCHMARK(chatter_revolution)
+    ->ArgNames({"rpm", "estimate"})
+    ->ArgsProduct({{750, 3000}, {0, 1}})
+    ->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();

@@ -87,6 +87,20 @@ TEST(Parameters, TheYModesComeFromTheStructureAndABadOneIsRefused) {
   EXPECT_NE(why.find("milling_model.structure.tool_y[0].damping_ratio"), std::string::npos) << why;
 }
 
+// The wideband channel's anti-alias cut-off, whose attenuation E's estimate
+// undoes: 0 is the F_z channel's 1000 Hz; a negative one is refused, naming
+// the field.
+TEST(Parameters, TheWidebandCutoffDefaultsToTheFzChannelsAndABadOneIsRefused) {
+  auto cfg = shipped("smc2.textproto");
+  cfg.mutable_operation()->set_wideband_cutoff_hz(0);
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_cutoff_hz, 1000);
+  cfg.mutable_operation()->set_wideband_cutoff_hz(2500);
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_cutoff_hz, 2500);
+  cfg.mutable_operation()->set_wideband_cutoff_hz(-5);
+  const std::string why = refusal(cfg);
+  EXPECT_NE(why.find("supervisor_config.operation.wideband_cutoff_hz"), std::string::npos) << why;
+}
+
 TEST(Validate, ShippedConfigurationsAreValidAndCarryTheirBoundGrafcet) {
   for (const char* name :
        {"no_control.textproto", "smc1.textproto", "smc1_guarded.textproto", "smc2.textproto"}) {

@@ -87,12 +87,16 @@ class OperatorChatterDetector final : public Module {
 // q = RMS(v_k - v_{k-1}) / RMS(v_k) over each revolution, the revolution
 // before taken at the same spindle angle (interpolated between samples):
 // runout repeats and cancels, and the structure smooths the entry's edges
-// out of v. q is not judged while the cutter leaves the part, across a gap
-// in the channel, or across a step in the cut (the mean F_z rising more
-// than a tenth beyond the engagement's rise). d is then set by the rules of
-// Parameters::chatter_vibration_*
-// (q rising past `rise`, q above `level`, or S above `backup`); without the
-// channel, by S above `chatter_threshold` in `chatter_confirm_revolutions`
+// out of v. Both energies are summed bin by bin over the revolution's
+// spectrum, each bin corrected for what holding the force over a sample
+// period and the channel's anti-alias filter take from it
+// (vibration_correction), so that q is the structure's own. q is not judged
+// while the cutter leaves the part, across a gap in the channel, or across
+// a step in the cut (the mean F_z rising more than a tenth beyond the
+// engagement's rise). d is then set by the rules of
+// Parameters::chatter_vibration_* (q rising past `rise`, or past `climb`
+// for longer; q above `level`; or S above `backup`); without the channel,
+// by S above `chatter_threshold` in `chatter_confirm_revolutions`
 // consecutive judged revolutions. It stays set until reset.
 class AutomaticChatterDetector final : public Module {
  public:
@@ -116,7 +120,14 @@ class AutomaticChatterDetector final : public Module {
   // against the one before at `period_samples` (the measured speed's
   // revolution in samples); NaN when the estimate does not cover both.
   // Real-time safe after configure().
-  double vibration_ratio(int samples, double period_samples) const noexcept;
+  double vibration_ratio(int samples, double period_samples) noexcept;
+
+  // The factor that takes a bin of the estimate's energy at this frequency
+  // to the structure's: |H(j omega)|^2 / (|H_held(e^(j omega T))|^2 |L(j omega)|^2),
+  // H the y modes, H_held their discretisation with the force held over a
+  // sample period, L the wideband channel's anti-alias filter; at most
+  // kMaxCorrection. Real-time safe.
+  double vibration_correction(double frequency_hz) const noexcept;
 
   // The statistic for the first `samples` samples of the buffer: one
   // revolution (also used by tests and the detector study). 0 for a count
@@ -147,12 +158,15 @@ class AutomaticChatterDetector final : public Module {
   };
   std::array<VibrationMode, EdgeParameters::kMaxVibrationModes> modes_{};
   int mode_count_ = 0;
-  std::vector<double> vibration_;  // the ring
-  uint64_t vibration_at_ = 0;      // samples written to it
-  uint64_t vibration_run_ = 0;     // of which the last ones in an unbroken run
-  bool wide_channel_ = false;      // a finite wideband F_y since the last revolution
-  double q1_ = 0, q2_ = 0;         // q of the last two judged revolutions (NaN: none)
-  int q_above_ = 0;                // judged revolutions in a row with q above `level`
+  std::vector<double> vibration_;                         // the ring
+  std::vector<double> vibration_buffer_;                  // one revolution, for its FFT
+  std::vector<std::complex<double>> vibration_spectrum_;  // the change's bins, then v's
+  static constexpr double kMaxCorrection = 25;
+  uint64_t vibration_at_ = 0;        // samples written to it
+  uint64_t vibration_run_ = 0;       // of which the last ones in an unbroken run
+  bool wide_channel_ = false;        // a finite wideband F_y since the last revolution
+  double q1_ = 0, q2_ = 0, q3_ = 0;  // q of the last three judged revolutions (NaN: none)
+  int q_above_ = 0;                  // judged revolutions in a row with q above `level`
 };
 
 // G: chatter suppression routine: run F (the core rewrites the program),
