@@ -95,21 +95,18 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
   return run;
 }
 
-namespace {
-
 // Chatter onset from the simulated vibration, independent of module E. A
 // stable cut repeats itself every revolution (forced vibration at the tooth
 // harmonics); chatter does not. Per revolution in the cut, the statistic is
 // RMS(v_k - v_{k-1}) / RMS(v_k) of the relative tool-part vibration v over
 // consecutive revolutions: about 0.02-0.05 while the cutter enters the part
 // (the forced vibration changes slowly), growing past 1 in chatter.
-constexpr double kOnsetThreshold = 0.15;
-constexpr double kMinEngagement = 0.05;
-
-double chatter_onset(const RunResult& run, double still_period_s) {
-  if (run.samples.size() < 16) return -1;
+std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s) {
+  constexpr double kMinEngagement = 0.05;
+  std::vector<RevolutionChange> out;
+  if (run.samples.size() < 16) return out;
   const double dt = run.samples[1].t_s - run.samples[0].t_s;
-  if (!(dt > 0)) return -1;
+  if (!(dt > 0)) return out;
   const ModuleMask hold = static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G));
   auto period_s = [&](const TraceSample& x) {
     return x.spindle_rpm > 0 ? 60.0 / x.spindle_rpm : still_period_s;
@@ -126,14 +123,15 @@ double chatter_onset(const RunResult& run, double still_period_s) {
     starts.push_back(k + 1);
   }
   const size_t revs = starts.size() - 1;
-  if (revs < 4) return -1;
+  out.resize(revs);
   // Per revolution: the statistic, and whether it is comparable with the
-  // revolution before (both fully in the cut, no hold, not leaving the part).
-  // The vibration one revolution earlier is interpolated between samples
-  // when a revolution is not a whole number of them.
-  std::vector<double> ratio(revs, 0.0);
-  std::vector<bool> comparable(revs, false);
-  for (size_t r = 1; r < revs; ++r) {
+  // revolution before. The vibration one revolution earlier is interpolated
+  // between samples when a revolution is not a whole number of them.
+  for (size_t r = 0; r < revs; ++r) {
+    RevolutionChange& c = out[r];
+    c.first_sample = starts[r];
+    c.end_sample = starts[r + 1];
+    if (r == 0) continue;
     double diff = 0, energy = 0;
     bool ok = true;
     for (size_t k = starts[r]; k < starts[r + 1]; ++k) {
@@ -149,7 +147,7 @@ double chatter_onset(const RunResult& run, double still_period_s) {
       const TraceSample& after = run.samples[std::min(j + 1, k)];
       const double v_before = w > 0 ? (1 - w) * before.vibration_y_mm + w * after.vibration_y_mm
                                     : before.vibration_y_mm;
-      if (std::isnan(now.vibration_y_mm) || std::isnan(v_before)) return -1;
+      if (std::isnan(now.vibration_y_mm) || std::isnan(v_before)) return {};
       // A hold or the end of the pass that begins within this revolution
       // (a reaction to it) ends the comparison there; one in force at its
       // start, or in the revolution before, makes it not comparable.
@@ -162,8 +160,8 @@ double chatter_onset(const RunResult& run, double still_period_s) {
       diff += d * d;
       energy += now.vibration_y_mm * now.vibration_y_mm;
     }
-    comparable[r] = ok && energy > 0;
-    ratio[r] = energy > 0 ? std::sqrt(diff / energy) : 0;
+    c.comparable = ok && energy > 0;
+    c.q = energy > 0 ? std::sqrt(diff / energy) : 0;
   }
   // Entering the part the statistic starts high and falls as the engagement
   // settles; chatter makes it grow. Onset: a comparable revolution above the
@@ -174,13 +172,22 @@ double chatter_onset(const RunResult& run, double still_period_s) {
   // paper's SMC II run gave 0.259 then 0.255), if the one after is larger
   // still or not comparable; a falling entry never passes that.
   for (size_t r = 2; r + 1 < revs; ++r) {
-    if (!comparable[r] || !comparable[r - 1]) continue;
-    if (ratio[r] <= kOnsetThreshold || ratio[r] <= ratio[r - 1]) continue;
-    if (!comparable[r + 1] || ratio[r + 1] > ratio[r]) return run.samples[starts[r]].t_s;
-    if (ratio[r + 1] > kOnsetThreshold && r + 2 < revs &&
-        (!comparable[r + 2] || ratio[r + 2] > ratio[r])) {
-      return run.samples[starts[r]].t_s;
+    const RevolutionChange &c = out[r], &next = out[r + 1];
+    if (!c.comparable || !out[r - 1].comparable || c.q <= out[r - 1].q) continue;
+    if (!next.comparable || next.q > c.q) {
+      out[r].onset_level = c.q;
+    } else if (r + 2 < revs && (!out[r + 2].comparable || out[r + 2].q > c.q)) {
+      out[r].onset_level = std::min(c.q, next.q);
     }
+  }
+  return out;
+}
+
+namespace {
+
+double chatter_onset(const RunResult& run, double still_period_s) {
+  for (const RevolutionChange& c : vibration_change(run, still_period_s)) {
+    if (c.onset_level > kChatterOnsetQ) return run.samples[c.first_sample].t_s;
   }
   return -1;
 }

@@ -29,7 +29,12 @@
 // rules' parameters. --mill-model FILE: the simulated mill cuts with that
 // model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
-// critical depths keep the configuration's. Progress goes to stderr. --dump writes
+// critical depths keep the configuration's. After the tables: the label's
+// own margin (the largest onset level of a stable cut and the smallest of
+// an unstable cut's onset, in the mill's q: smc/edge/runner.hpp,
+// vibration_change), and E's q against the mill's on the labelling runs'
+// comparable revolutions with the mill's q in 0.10-0.30, by speed.
+// Progress goes to stderr. --dump writes
 // every revolution of the labelling run (E's rules off) that E judged or
 // skipped in contact (statistic, q, engagement, feed) with its onset, to
 // try other decision rules offline: what happens before E's first
@@ -50,6 +55,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -224,6 +230,14 @@ int main(int argc, char** argv) {
   std::vector<Cell> cells;
   int run_id = 0;
   Cell all;
+  // The label's own margin (the mill's q, revolution by revolution, from the
+  // labelling run): the largest onset level of a stable cut (below the
+  // onset's threshold, or it would not be stable) and the smallest of an
+  // unstable cut's onset; and E's estimate of q against the mill's own, on
+  // the revolutions near the threshold, by speed.
+  double stable_level = 0, unstable_level = HUGE_VAL;
+  std::map<double, std::vector<double>> estimate_error;  // rpm -> q_E / q
+  const double still_period_s = base.operation().slow_period_s();
   for (double rpm : speeds) {
     for (double width : widths) {
       auto model_msg = base.milling_model();
@@ -278,6 +292,43 @@ int main(int argc, char** argv) {
             const double onset = label.chatter_onset_s();
             const double first_detection = s.chatter_detected_s();
             ++run_id;
+            {
+              const auto changes = vibration_change(labelled, still_period_s);
+              double cut_level = 0;
+              for (const auto& change : changes) {
+                if (onset >= 0 && change.onset_level > kChatterOnsetQ) {
+                  cut_level = change.onset_level;
+                  break;
+                }
+                cut_level = std::max(cut_level, change.onset_level);
+              }
+              if (onset < 0) {
+                stable_level = std::max(stable_level, cut_level);
+              } else {
+                unstable_level = std::min(unstable_level, cut_level);
+              }
+              // E's revolutions end on the trace's (both count the same
+              // clock): pair each judged one with the trace's that ends there.
+              const double dt = labelled.samples.size() > 1
+                                    ? labelled.samples[1].t_s - labelled.samples[0].t_s
+                                    : 0;
+              size_t at = 0;
+              for (const auto& r : labelled.revolutions) {
+                if (!(r.chatter_vibration_ratio > 0)) continue;
+                while (at < changes.size() &&
+                       labelled.samples[changes[at].end_sample - 1].t_s < r.t_s - 0.5 * dt) {
+                  ++at;
+                }
+                if (at == changes.size()) break;
+                const auto& change = changes[at];
+                if (std::fabs(labelled.samples[change.end_sample - 1].t_s - r.t_s) > 0.5 * dt) {
+                  continue;
+                }
+                if (change.comparable && change.q >= 0.1 && change.q <= 0.3) {
+                  estimate_error[rpm].push_back(r.chatter_vibration_ratio / change.q);
+                }
+              }
+            }
             if (dump != nullptr) {
               for (const auto& r : labelled.revolutions) {
                 if ((r.active & bit(ModuleId::E)) == 0 || !r.contact) continue;
@@ -402,6 +453,24 @@ int main(int argc, char** argv) {
       all.false_detections == 0 && all.detected == all.unstable_runs && all.worst_delay_revs <= 3.0;
   std::printf("goal (0 false detections, every unstable cut within 3 revolutions): %s\n",
               pass ? "met" : "NOT met");
+  std::printf(
+      "\nthe label's own margin, in the mill's q: the largest onset level of a stable cut %.4f, "
+      "the smallest of an unstable cut's onset %.4f (threshold %.2f)\n",
+      stable_level, unstable_level < HUGE_VAL ? unstable_level : 0.0, kChatterOnsetQ);
+  if (estimate && !estimate_error.empty()) {
+    std::printf(
+        "E's q against the mill's, comparable revolutions with the mill's q in 0.10-0.30 "
+        "(labelling runs):\n%6s %9s %8s %8s %8s\n",
+        "rpm", "revs", "p5", "median", "p95");
+    for (auto& [speed, e] : estimate_error) {
+      std::sort(e.begin(), e.end());
+      auto pct = [&](double f) {
+        return e[static_cast<size_t>(f * static_cast<double>(e.size() - 1) + 0.5)];
+      };
+      std::printf("%6.0f %9zu %8.3f %8.3f %8.3f\n", speed, e.size(), pct(0.05), pct(0.5),
+                  pct(0.95));
+    }
+  }
   if (dump != nullptr) std::fclose(dump);
   if (raw_runs != nullptr) {
     std::fclose(raw_runs);

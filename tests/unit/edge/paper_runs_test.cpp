@@ -898,3 +898,59 @@ TEST(SmcTwoPlus, ADriveThatCannotChangeTheSpindleSpeedIsRefused) {
   EXPECT_THROW((void)edge_config_from_proto(raw), ConfigError)
       << "the Grafcet still names O: refused by the configuration check";
 }
+
+namespace {
+
+// A trace whose vibration repeats one shape every revolution, scaled by
+// a_r: the change from one revolution to the next is (a_r - a_r-1) x the
+// shape, so q_r = 1 - a_r-1 / a_r exactly, and a_r is chosen for the q_r
+// wanted.
+RunResult scaled_revolutions(const std::vector<double>& q, double rpm, int samples_per_rev) {
+  RunResult run;
+  const double dt = 60.0 / rpm / samples_per_rev;
+  double a = 1;
+  for (size_t r = 0; r < q.size(); ++r) {
+    if (r > 0) a /= 1 - q[r];
+    for (int i = 0; i < samples_per_rev; ++i) {
+      TraceSample s{};
+      s.t_s = dt * static_cast<double>(r * static_cast<size_t>(samples_per_rev) +
+                                       static_cast<size_t>(i));
+      s.spindle_rpm = rpm;
+      s.vibration_y_mm = a * (0.3 + std::sin(2 * M_PI * 3 * i / samples_per_rev) +
+                              0.5 * std::cos(2 * M_PI * 7 * i / samples_per_rev));
+      s.engagement = 1;
+      s.in_pass = true;
+      s.contact = true;
+      run.samples.push_back(s);
+    }
+  }
+  return run;
+}
+
+}  // namespace
+
+TEST(ChatterLabel, TheOnsetLevelIsTheLargestThresholdAtWhichARevolutionIsTheOnset) {
+  // Revolution:  0  1     2     3     4     5     6     7     8     9
+  const std::vector<double> q{0, 0.02, 0.10, 0.149, 0.16, 0.12, 0.14, 0.20, 0.17, 0.25};
+  const auto run = scaled_revolutions(q, 1500, 80);
+  const auto changes = vibration_change(run, 0.04);
+  ASSERT_EQ(changes.size(), q.size());
+  for (size_t r = 1; r < q.size(); ++r) {
+    EXPECT_TRUE(changes[r].comparable) << r;
+    EXPECT_NEAR(changes[r].q, q[r], 1e-9) << r;
+  }
+  // 3 rises and is followed by a larger one: its own q. 4 rises and falls
+  // below it (0.12): none. 7 rises, holds at 0.17, and 9 passes it: the
+  // lower of the two (the pause). 2 rises and is followed by a larger one.
+  EXPECT_NEAR(changes[2].onset_level, 0.10, 1e-9);
+  EXPECT_NEAR(changes[3].onset_level, 0.149, 1e-9);
+  EXPECT_EQ(changes[4].onset_level, 0);
+  EXPECT_EQ(changes[5].onset_level, 0);
+  EXPECT_NEAR(changes[6].onset_level, 0.14, 1e-9);
+  EXPECT_NEAR(changes[7].onset_level, 0.17, 1e-9);
+  // So a cut that reached 0.149 in a rising pair never had the onset at
+  // kChatterOnsetQ: its first onset is 7, where 0.20 held above 0.15.
+  size_t onset = 0;
+  while (onset < changes.size() && !(changes[onset].onset_level > kChatterOnsetQ)) ++onset;
+  EXPECT_EQ(onset, 7u);
+}

@@ -75,6 +75,26 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options);
 // Figures of merit of a run (what summary.json holds).
 smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run);
 
+// The simulated vibration's change from one revolution to the next, which
+// labels chatter independently of module E (the summary's chatter onset):
+// per revolution of the trace (by the spindle speed it records; at a still
+// spindle, still_period_s), q = RMS(v_k - v_k-1) / RMS(v_k) of the relative
+// tool-part vibration, whether it is comparable with the revolution before
+// (both fully in the cut, no hold, not leaving the part), and its onset
+// level: the largest threshold at which it would be the onset (above the
+// threshold and above the revolution before, then larger still -- or, after
+// one revolution above the threshold, larger than it; or not comparable
+// any more, a reaction or the pass's end). 0 where it would be at none.
+// The onset is the first revolution whose level exceeds kChatterOnsetQ.
+struct RevolutionChange {
+  size_t first_sample = 0, end_sample = 0;  // [first, end) in RunResult::samples
+  double q = 0;
+  bool comparable = false;
+  double onset_level = 0;
+};
+inline constexpr double kChatterOnsetQ = 0.15;
+std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s);
+
 // Writes samples.csv, revolutions.csv, events.csv, summary.json and the plots
 // (force.svg: F_Y with F_ref, pass boundaries, feed-hold and chatter marks;
 // feed.svg; raw.svg) into `dir` (created if needed). Throws on I/O errors
