@@ -4,6 +4,7 @@
 // not from the project's view of it. One LinuxCNC per host: the tests hold
 // the "linuxcnc" resource lock and start and stop their own.
 
+#include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -27,6 +28,7 @@
 #include "child_process.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/documents/load.hpp"
+#include "smc/machining/model.hpp"
 #include "smc/supervision/gcode.hpp"
 #include "smc/transport/endpoint.hpp"
 #include "smc/transport/participant.hpp"
@@ -330,6 +332,37 @@ double last_cutting_x(const std::string& path, double force_n) {
     if (std::atof(f[f_y].c_str()) > force_n && f[contact] == "1") last = std::atof(f[x].c_str());
   }
   return last;
+}
+
+// Revolutions in contact in which module E judged its vibration estimate
+// (a chatter_vibration_ratio above 0), and the median of that q over them.
+struct EstimateSeen {
+  int revolutions = 0;
+  double median_q = 0;
+};
+EstimateSeen estimate_seen(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  const std::vector<std::string> header = csv_fields(line);
+  const auto q_at = std::find(header.begin(), header.end(), "chatter_vibration_ratio");
+  const auto contact_at = std::find(header.begin(), header.end(), "contact");
+  if (q_at == header.end() || contact_at == header.end()) {
+    ADD_FAILURE() << path << ": no chatter_vibration_ratio or contact column in '" << line << "'";
+    return {};
+  }
+  const auto q_col = static_cast<std::size_t>(q_at - header.begin());
+  const auto contact_col = static_cast<std::size_t>(contact_at - header.begin());
+  std::vector<double> q;
+  while (std::getline(in, line)) {
+    const std::vector<std::string> f = csv_fields(line);
+    if (f.size() <= std::max(q_col, contact_col) || f[contact_col] != "1") continue;
+    const double v = std::atof(f[q_col].c_str());
+    if (v > 0) q.push_back(v);
+  }
+  if (q.empty()) return {};
+  std::nth_element(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(q.size() / 2), q.end());
+  return {static_cast<int>(q.size()), q[q.size() / 2]};
 }
 
 double monotonic_s() {
@@ -909,6 +942,79 @@ TEST_F(LinuxCncDyno, TheLoopOnLinuxCncNeverAllocates) {
 
 // A machine that is not homed refuses the run before anything moves, naming
 // what is missing.
+// A stable cut with runout on the dynamometer: 3000 rpm, 25 mm wide, 10 um
+// of eccentric runout, 5.5 mm deep (0.3 x the critical depth at 0.1
+// mm/tooth). The detector study labels it stable; runout puts S, F_z's
+// non-harmonic share, above S-alone's 0.3 (its entry on the simulated mill:
+// 0.357), while E's vibration estimate reads it as the repeating cut it is.
+class LinuxCncRunout : public LinuxCncDyno {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() / ("smc-lcnr-" + std::to_string(getpid()));
+    std::filesystem::create_directories(dir_);
+    ::chmod(dir_.c_str(), 0777);
+    auto c = smc::documents::load_supervisor_config(src("edge/configs/smc2.textproto"));
+    auto* model = c.mutable_milling_model();
+    model->mutable_workpiece()->set_width_mm(25);
+    for (const double r :
+         smc::machining::eccentric_runout_um(static_cast<int>(model->cutter().teeth()), 10)) {
+      model->mutable_cutter()->add_radial_runout_um(r);
+    }
+    auto* pass = c.mutable_program()->mutable_passes(0);
+    pass->set_depth_mm(5.5);
+    pass->set_spindle_rpm(3000);
+    pass->set_feedrate_mm_s(0.1 * c.operation().teeth() * 3000 / 60.0);
+    c.mutable_program()->set_total_depth_mm(5.5);
+    std::string text;
+    ASSERT_TRUE(google::protobuf::TextFormat::PrintToString(c, &text));
+    config_ = write("runout.textproto", text);
+    int st = -1;
+    const std::string out = capture(src("deploy/linuxcnc/run.sh") + " start --dir " +
+                                        (dir_ / "cnc").string() + " --dyno " + config_,
+                                    &st);
+    ASSERT_EQ(st, 0) << out;
+    started_ = true;
+  }
+  // 15 s of the run: the controller holds F_ref (95 N at this speed) with
+  // a small feed, and the whole pass would take minutes; the run stops at
+  // the time limit (status 3) with its summary written.
+  cfg::RunSummary cut(const std::string& name) {
+    int st = -1;
+    const std::string out = simulate(config_, name, &st, 15);
+    EXPECT_EQ(st, 3) << out;
+    cfg::RunSummary s;
+    smc::documents::load((dir_ / name / "summary.json").string(), s);
+    return s;
+  }
+  std::string config_;
+};
+
+TEST_F(LinuxCncRunout, TheWidebandChannelKeepsRunoutFromReadingAsChatter) {
+  // With the dynamometer's wideband F_y (smc-force-y-wide and its presence
+  // bit, through the sampler): E judges its estimate, and the cut is stable.
+  const cfg::RunSummary wide = cut("wide");
+  const EstimateSeen wide_q = estimate_seen((dir_ / "wide" / "revolutions.csv").string());
+  std::printf(
+      "with the wideband channel: chatter events %u, E's estimate in %d revolutions, "
+      "median q %.3f\n",
+      wide.chatter_events(), wide_q.revolutions, wide_q.median_q);
+  EXPECT_GT(wide_q.revolutions, 300);
+  EXPECT_EQ(wide.chatter_events(), 0u) << "runout read as chatter";
+  // A sensor without the channel: the presence bit undriven and false. E
+  // judges S alone, and runout's share of F_z reads as chatter.
+  int st = -1;
+  std::string h = as_mill("halcmd unlinkp smc-dyno.wideband", &st);
+  ASSERT_EQ(st, 0) << h;
+  h = as_mill("halcmd sets smc-force-y-wide-present FALSE", &st);
+  ASSERT_EQ(st, 0) << h;
+  const cfg::RunSummary alone = cut("alone");
+  const EstimateSeen alone_q = estimate_seen((dir_ / "alone" / "revolutions.csv").string());
+  std::printf("without it: chatter events %u, first at %.2f s, E's estimate in %d revolutions\n",
+              alone.chatter_events(), alone.chatter_detected_s(), alone_q.revolutions);
+  EXPECT_EQ(alone_q.revolutions, 0);
+  EXPECT_GE(alone.chatter_events(), 1u) << "S alone should read this runout as chatter";
+}
+
 TEST_F(LinuxCncDyno, AMachineNotHomedIsRefusedBeforeAnythingMoves) {
   python(
       "c.mode(linuxcnc.MODE_MANUAL); c.wait_complete(5); c.teleop_enable(0); "
@@ -1005,6 +1111,18 @@ TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   // machine's highest feed (36 mm/s at 1500 rpm: 1.44 mm) twice over: the
   // controller raises the feed as the force falls, and LinuxCNC's run
   // differs from run to run (X141.0 and X142.1 against X140.9 in two runs).
+  // Module E reads the vibration from the dynamometer's wideband F_y on
+  // LinuxCNC too (smc-edge.hal, sampler pins 10-11): it judges its estimate
+  // in most of the cut, and reads the same steady cut alike (the median q
+  // over the cut's revolutions, within a third: LinuxCNC's feed ramps and
+  // holds differ).
+  const EstimateSeen lc_q = estimate_seen((dir_ / "lcnc" / "revolutions.csv").string());
+  const EstimateSeen sim_q = estimate_seen(sim_dir + "/revolutions.csv");
+  std::printf("E's estimate judged in %d / %d revolutions in contact, median q %.3f / %.3f\n",
+              lc_q.revolutions, sim_q.revolutions, lc_q.median_q, sim_q.median_q);
+  ASSERT_GT(sim_q.revolutions, 50);
+  EXPECT_GT(lc_q.revolutions, sim_q.revolutions / 2);
+  EXPECT_NEAR(lc_q.median_q, sim_q.median_q, sim_q.median_q / 3);
   const double lc_end = last_cutting_x((dir_ / "lcnc" / "revolutions.csv").string(), 50);
   const double sim_end = last_cutting_x(sim_dir + "/revolutions.csv", 50);
   std::printf("last revolution with F_Y above 50 N: X%.2f / X%.2f\n", lc_end, sim_end);

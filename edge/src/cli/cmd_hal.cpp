@@ -26,7 +26,8 @@ void add_hal(CLI::App& app) {
       "hal-samples",
       "Read N records of the LinuxCNC servo thread through the sampler stream the LinuxCNC\n"
       "drive uses (deploy/linuxcnc/smc-edge.hal) and report lost and repeated records, the\n"
-      "largest backlog, the path travelled and the spindle's turns, as JSON. Exit 0 when no\n"
+      "largest backlog, the path travelled, the spindle's turns and whether the force sensor\n"
+      "gives the wideband F_y channel (module E's vibration estimate), as JSON. Exit 0 when no\n"
       "record was lost or repeated, 1 otherwise, 2 when HAL or the sampler is not there.\n"
       "Run it as LinuxCNC's user: deploy/linuxcnc/run.sh exec smc-edge hal-samples");
   sub->add_option("--component", args->component, "HAL component name to join as")
@@ -65,12 +66,14 @@ void add_hal(CLI::App& app) {
     std::printf(
         "{\"records\": %llu, \"lost\": %llu, \"repeated\": %llu, \"overruns\": %d, "
         "\"max_backlog\": %d, \"wall_s\": %.3f, \"x_min_mm\": %.4f, \"x_max_mm\": %.4f, "
-        "\"spindle_revs\": %.3f, \"last_velocity_mm_s\": %.4f, \"complete\": %s}\n",
+        "\"spindle_revs\": %.3f, \"last_velocity_mm_s\": %.4f, \"wideband_fy\": %s, "
+        "\"complete\": %s}\n",
         static_cast<unsigned long long>(s->records()), static_cast<unsigned long long>(s->lost()),
         static_cast<unsigned long long>(s->repeated()), s->overruns(), backlog_max, wall,
         s->records() > 0 ? x_min : 0.0, s->records() > 0 ? x_max : 0.0,
         s->records() > 0 ? r.spindle_revs - first.spindle_revs : 0.0,
-        s->records() > 0 ? r.velocity_mm_s : 0.0, complete ? "true" : "false");
+        s->records() > 0 ? r.velocity_mm_s : 0.0, r.fy_wide_present ? "true" : "false",
+        complete ? "true" : "false");
     if (!complete) throw Failure(1, "timed out after " + std::to_string(args->timeout_s) + " s");
     if (s->lost() > 0 || s->repeated() > 0) {
       throw Failure(1, "records lost or repeated: the edge would not see every servo period");

@@ -125,7 +125,7 @@ HalSampleStream::~HalSampleStream() {
 
 bool HalSampleStream::read(HalRecord& out) noexcept {
   if (!hal_stream_readable(&impl_->stream)) return false;
-  hal_stream_data d[10];
+  hal_stream_data d[12];
   unsigned no = 0;
   if (hal_stream_read(&impl_->stream, d, &no) < 0) return false;
   out.fx_n = d[0].f;
@@ -138,6 +138,8 @@ bool HalSampleStream::read(HalRecord& out) noexcept {
   out.z_mm = d[7].f;
   out.velocity_mm_s = d[8].f;
   out.program_line = d[9].s;
+  out.fy_wide_n = d[10].f;
+  out.fy_wide_present = d[11].b;
   out.sample_no = no;
   if (records_ > 0) {
     if (no == last_no_) {

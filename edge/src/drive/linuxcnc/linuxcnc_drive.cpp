@@ -11,6 +11,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <mutex>
 #include <numbers>
 #include <thread>
@@ -446,8 +447,11 @@ Status LinuxCncDrive::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
 
   const PassSpec& cur = d.program.passes[static_cast<std::size_t>(
       std::clamp(d.pass, 0, std::max(0, d.program.count - 1)))];
-  out.force =
-      ForceSample{static_cast<double>(d.ticks) * d.period_s, d.rec.fx_n, d.rec.fy_n, d.rec.fz_n};
+  // The wideband F_y where the sensor has the channel; NaN (none) where it
+  // leaves the signals undriven, which read 0, not a force.
+  out.force = ForceSample{
+      static_cast<double>(d.ticks) * d.period_s, d.rec.fx_n, d.rec.fy_n, d.rec.fz_n,
+      d.rec.fy_wide_present ? d.rec.fy_wide_n : std::numeric_limits<double>::quiet_NaN()};
   out.spindle_rpm = d.rec.spindle_rps * 60.0;
   out.depth_mm = cur.depth_mm;
   out.programmed_feedrate_mm_s = cur.feedrate_mm_s;

@@ -5,8 +5,9 @@
 // actual speed, steps the time-domain milling model of services/machining
 // (forces A1-A5 and the axial force, the structure's modes, the regenerative
 // chip) over that period, and writes the force a dynamometer would read to
-// its pins, through the same anti-alias filter and noise as the simulated
-// mill's sensor. Run it in the servo thread before the edge's sampler: the
+// its pins, through the same anti-alias filters and noise as the simulated
+// mill's sensor (F_y also a second time through F_z's wideband filter, for
+// module E's vibration estimate). Run it in the servo thread before the edge's sampler: the
 // force the edge reads in a period is that of the motion of the same period.
 //
 // The part: the configuration's workpiece (X0 its leading edge, Y0 the
@@ -36,6 +37,10 @@
 //                              edge from this period on (as the simulated
 //                              mill's simulation.tooth_breaks); 0: none
 //   out float force-x/y/z      force on the tool (N), filtered, with noise
+//   out float force-y-wide     F_y through F_z's wideband filter, with noise
+//                              from a stream of its own (the simulated mill's
+//                              f_y_wide_n)
+//   out bit   wideband         true: this sensor has the wideband F_y channel
 //   out float power-w          spindle (cutting) power at the sample instant
 //   out float depth-mm         depth of cut at the cutter's leading edge
 //   out s32   teeth-in-cut
@@ -91,6 +96,8 @@ struct Pins {
   hal_float_t* force_x;
   hal_float_t* force_y;
   hal_float_t* force_z;
+  hal_float_t* force_y_wide;
+  hal_bit_t* wideband;
   hal_float_t* power_w;
   hal_float_t* depth_mm;
   hal_s32_t* teeth_in_cut;
@@ -102,9 +109,13 @@ struct Dyno {
   mc::MillingModel model;
   mc::MillSimulator sim;
   std::vector<double> trace_x, trace_y, trace_z;
-  mc::AntiAliasLowPass lp_x, lp_y, lp_z;
+  mc::AntiAliasLowPass lp_x, lp_y, lp_z, lp_y_wide;
   std::mt19937_64 rng;
   std::normal_distribution<double> noise{0.0, 1.0};
+  // The wideband channel's noise has a stream of its own, so that the
+  // other channels' noise is what it was before the channel existed.
+  std::mt19937_64 rng_wide;
+  std::normal_distribution<double> noise_wide{0.0, 1.0};
   double noise_rms_n = 0;
   // Depth already removed, per bin along the part (mm below the top face).
   std::vector<double> removed;
@@ -136,6 +147,7 @@ struct Dyno {
     lp_x.reset();
     lp_y.reset();
     lp_z.reset();
+    lp_y_wide.reset();
     have_x = false;
     clear_of_part = false;
   }
@@ -183,8 +195,12 @@ std::unique_ptr<Dyno> make_dyno() {
   d->lp_x.configure(s.f_y_cutoff_hz(), rate);
   d->lp_y.configure(s.f_y_cutoff_hz(), rate);
   d->lp_z.configure(s.f_z_cutoff_hz(), rate);
+  d->lp_y_wide.configure(s.f_z_cutoff_hz(), rate);
   d->noise_rms_n = std::max(0.0, s.noise_rms_n());
   d->rng.seed(static_cast<std::uint64_t>(seed));
+  // Derived from the seed and different from it, as the simulated mill's.
+  d->rng_wide.seed(static_cast<std::mt19937_64::result_type>(seed) ^
+                   std::mt19937_64::result_type{0x9e3779b97f4a7c15});
   d->removed.assign(static_cast<std::size_t>(std::ceil(d->length() / d->bin_mm)) + 1, 0.0);
   d->period_ns = static_cast<long>(std::lround(period_s * 1e9));
   return d;
@@ -237,16 +253,18 @@ void update(void* /*arg*/, long period) {
   in.depth_mm = std::isfinite(tip) && d.clear_of_part ? std::max(0.0, tip - d.exit_level) : 0;
   mc::Sample smp;
   status |= d.sim.step(in, smp, {d.trace_x.data(), d.trace_y.data(), d.trace_z.data()});
-  double fx = 0, fy = 0, fz = 0;
+  double fx = 0, fy = 0, fz = 0, fy_wide = 0;
   for (std::size_t k = 0; k < d.trace_x.size(); ++k) {
     fx = d.lp_x(d.trace_x[k]);
     fy = d.lp_y(d.trace_y[k]);
     fz = d.lp_z(d.trace_z[k]);
+    fy_wide = d.lp_y_wide(d.trace_y[k]);
   }
   if (d.noise_rms_n > 0) {
     fx += d.noise_rms_n * d.noise(d.rng);
     fy += d.noise_rms_n * d.noise(d.rng);
     fz += d.noise_rms_n * d.noise(d.rng);
+    fy_wide += d.noise_rms_n * d.noise_wide(d.rng_wide);
   }
   // The cutter's footprint behind its leading edge now stands at the tool's
   // Z: every bin [i, i+1) x bin_mm wholly behind the leading edge (the bin
@@ -260,6 +278,8 @@ void update(void* /*arg*/, long period) {
   *p.force_x = fx;
   *p.force_y = fy;
   *p.force_z = fz;
+  *p.force_y_wide = fy_wide;
+  *p.wideband = true;
   *p.power_w = smp.power_w;
   *p.depth_mm = in.depth_mm;
   *p.teeth_in_cut = smp.teeth_in_cut;
@@ -280,6 +300,8 @@ int make_pins(int comp) {
   r |= hal_pin_float_new("smc-dyno.force-x", HAL_OUT, &p.force_x, comp);
   r |= hal_pin_float_new("smc-dyno.force-y", HAL_OUT, &p.force_y, comp);
   r |= hal_pin_float_new("smc-dyno.force-z", HAL_OUT, &p.force_z, comp);
+  r |= hal_pin_float_new("smc-dyno.force-y-wide", HAL_OUT, &p.force_y_wide, comp);
+  r |= hal_pin_bit_new("smc-dyno.wideband", HAL_OUT, &p.wideband, comp);
   r |= hal_pin_float_new("smc-dyno.power-w", HAL_OUT, &p.power_w, comp);
   r |= hal_pin_float_new("smc-dyno.depth-mm", HAL_OUT, &p.depth_mm, comp);
   r |= hal_pin_s32_new("smc-dyno.teeth-in-cut", HAL_OUT, &p.teeth_in_cut, comp);
