@@ -1112,10 +1112,11 @@ TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   // controller raises the feed as the force falls, and LinuxCNC's run
   // differs from run to run (X141.0 and X142.1 against X140.9 in two runs).
   // Module E reads the vibration from the dynamometer's wideband F_y on
-  // LinuxCNC too (smc-edge.hal, sampler pins 10-11): it judges its estimate
-  // in most of the cut, and reads the same steady cut alike (the median q
-  // over the cut's revolutions, within a third: LinuxCNC's feed ramps and
-  // holds differ).
+  // LinuxCNC too (smc-edge.hal, sampler pins 10-11): its q is above 0 (with
+  // the channel's noise taken out, a revolution that only repeats reads 0)
+  // in at least half as many of the cut's revolutions as on the simulated
+  // mill, and it reads the same steady cut alike (the median q, within a third:
+  // LinuxCNC's feed ramps and holds differ).
   const EstimateSeen lc_q = estimate_seen((dir_ / "lcnc" / "revolutions.csv").string());
   const EstimateSeen sim_q = estimate_seen(sim_dir + "/revolutions.csv");
   std::printf("E's estimate judged in %d / %d revolutions in contact, median q %.3f / %.3f\n",

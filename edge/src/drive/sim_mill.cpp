@@ -141,8 +141,12 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
     throw ConfigError(e.what());
   }
   if (!(sample_period_s > 0)) throw ConfigError("sample_period_s: must be > 0");
-  for (double hz : {sim.f_y_cutoff_hz(), sim.f_z_cutoff_hz()}) {
-    if (hz < 0) throw ConfigError("simulation: anti-alias cut-off frequencies must be >= 0");
+  for (double hz : {sim.f_y_cutoff_hz(), sim.f_z_cutoff_hz(), sim.f_y_wide_cutoff_hz()}) {
+    if (!(hz >= 0) || !std::isfinite(hz)) {
+      throw ConfigError(
+          "simulation: anti-alias cut-off frequencies (f_y_cutoff_hz, f_z_cutoff_hz, "
+          "f_y_wide_cutoff_hz) must be finite and >= 0; fix: e.g. 250, 1000, 500");
+    }
   }
   if (sim.noise_rms_n() < 0) throw ConfigError("simulation.noise_rms_n: must be >= 0");
   const double lag = sim.feed_drive_lag_s();
@@ -168,7 +172,8 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
   s.lp_x.configure(sim.f_y_cutoff_hz(), rate);
   s.lp_y.configure(sim.f_y_cutoff_hz(), rate);
   s.lp_z.configure(sim.f_z_cutoff_hz(), rate);
-  s.lp_y_wide.configure(sim.f_z_cutoff_hz(), rate);
+  s.lp_y_wide.configure(
+      sim.f_y_wide_cutoff_hz() > 0 ? sim.f_y_wide_cutoff_hz() : sim.f_z_cutoff_hz(), rate);
   s.removed.assign(static_cast<size_t>(std::ceil(s.length() / s.bin_mm)) + 1, 0.0);
   const auto& w = s.model.workpiece;
   const double y_lo = w.offset_mm - w.width_mm / 2, y_hi = w.offset_mm + w.width_mm / 2;

@@ -93,7 +93,8 @@ Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
   return Status::kOk;
 }
 
-double AutomaticChatterDetector::vibration_correction(double frequency_hz) const noexcept {
+double AutomaticChatterDetector::vibration_correction(double frequency_hz,
+                                                      double* held_norm) const noexcept {
   using C = std::complex<double>;
   const double omega = 2 * std::numbers::pi * frequency_hz;
   const C s(0, omega);
@@ -112,6 +113,7 @@ double AutomaticChatterDetector::vibration_correction(double frequency_hz) const
   const double r = fc > 0 ? frequency_hz / fc : 0;
   const double sensor = 1 / (1 + r * r * r * r);  // |Butterworth|^2, second order
   const double below = std::norm(held) * sensor;
+  if (held_norm != nullptr) *held_norm = std::norm(held);
   return below > 0 ? std::min(std::norm(structure) / below, kMaxCorrection) : kMaxCorrection;
 }
 
@@ -145,13 +147,25 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   // Both energies by Parseval, each bin corrected from what the estimate
   // passes to what the structure does at that frequency.
   const double df = 1.0 / (static_cast<double>(n) * p_.sample_period_s);
-  double changed = 0, energy = 0;
+  const double noise = p_.vibration_sensor_noise_rms_n;
+  const double noise_bin = static_cast<double>(n) * noise * noise;
+  double changed = 0, energy = 0, noise_changed = 0, noise_energy = 0;
   for (size_t k = 0; k < bins; ++k) {
     const bool single = k == 0 || (n % 2 == 0 && k == n / 2);
-    const double c = (single ? 1.0 : 2.0) * vibration_correction(static_cast<double>(k) * df);
+    const double f = static_cast<double>(k) * df;
+    double held = 0;
+    const double c = (single ? 1.0 : 2.0) * vibration_correction(f, &held);
     changed += c * std::norm(change[k]);
     energy += c * std::norm(now[k]);
+    if (noise > 0) {
+      const double wt = 2 * std::numbers::pi * f * p_.sample_period_s;
+      const double delayed = std::norm(std::polar(w, -wt) + (1 - w));
+      noise_energy += c * noise_bin * held;
+      noise_changed += c * noise_bin * held * (1 + delayed);
+    }
   }
+  changed = std::max(changed - noise_changed, 0.0);
+  energy -= noise_energy;
   return energy > 0 ? std::sqrt(changed / energy) : nan;
 }
 
@@ -270,8 +284,15 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       const bool rising = q1_ > p_.chatter_vibration_rise && q1_ > g * q2_ && q > g * q1_;
       const bool climbing =
           q2_ > p_.chatter_vibration_climb && q2_ > g * q3_ && q1_ > g * q2_ && q > g * q1_;
+      // The onset's pause: above `pause` and rising, held above it for a
+      // revolution (chatter locking for a while, or q alternating as it
+      // grows), then past where it rose to.
+      const double hold = p_.chatter_vibration_pause;
+      const bool pausing = q2_ > hold && q2_ > g * q3_ && q1_ > hold && q > g * q2_;
       q_above_ = q > p_.chatter_vibration_level ? q_above_ + 1 : 0;
-      if (rising || climbing || q_above_ >= kVibrationConfirm) s.chatter_detected = true;
+      if (rising || climbing || pausing || q_above_ >= kVibrationConfirm) {
+        s.chatter_detected = true;
+      }
       q3_ = q2_;
       q2_ = q1_;
       q1_ = q;

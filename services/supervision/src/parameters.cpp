@@ -184,7 +184,10 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
                  "set the time the spindle has to reach a new speed, e.g. 5 (0: default)");
   p.vibration_sensor_cutoff_hz =
       or_default("wideband_cutoff_hz", op.wideband_cutoff_hz(), 1000.0, 1.0, 1e6,
-                 "set the wideband F_y channel's anti-alias cut-off, e.g. 1000 (0: default)");
+                 "set the wideband F_y channel's anti-alias cut-off, e.g. 500 (0: 1000 Hz)");
+  p.vibration_sensor_noise_rms_n =
+      or_default("wideband_noise_rms_n", op.wideband_noise_rms_n(), 0.0, 0.0, 1000.0,
+                 "set the wideband F_y channel's noise in N rms, e.g. 2 (0: none taken out)");
   if (op.identification_levels_size() > Parameters::kMaxIdentificationLevels) {
     o.fail("identification_levels", "has more levels than the edge holds",
            op.identification_levels_size(), "give at most 4 levels, e.g. [0.6, 0.8]");

@@ -4,8 +4,9 @@
 //   build/release/bin/smc-bench-chatter-detector [--seeds N] [--speeds 750,1100,...]
 //       [--widths 25,37,50] [--fractions 0.3,0.6,0.9,1.3,1.8] [--runouts 0,10,20]
 //       [--quick] [--verbose] [--dump FILE.csv] [--dump-samples STEM]
-//       [--force-only] [--vibration-rise X] [--vibration-climb X] [--vibration-growth X]
-//       [--vibration-level X] [--vibration-backup X] [--mill-model FILE]
+//       [--force-only] [--vibration-rise X] [--vibration-climb X] [--vibration-pause X]
+//       [--vibration-growth X] [--vibration-level X] [--vibration-backup X]
+//       [--vibration-noise N] [--mill-model FILE]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
@@ -25,9 +26,10 @@
 // to E's detection, in revolutions. E judges the vibration it estimates
 // from the simulated dynamometer's wideband F_y channel, with S as the
 // backup (edge/README.md, module E); --force-only takes the estimate away
-// (S alone, as on a sensor without that channel), and --vibration-* set its
-// rules' parameters. --mill-model FILE: the simulated mill cuts with that
-// model's structure and cutting law (e.g.
+// (S alone, as on a sensor without that channel), --vibration-* set its
+// rules' parameters, and --vibration-noise the channel noise it takes out
+// (N rms; the configuration's operation.wideband_noise_rms_n otherwise). --mill-model FILE: the
+// simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
 // critical depths keep the configuration's. After the tables: the label's
 // own margin (the largest onset level of a stable cut and the smallest of
@@ -91,7 +93,8 @@ int main(int argc, char** argv) {
   double threshold_override = 0;
   int confirm_override = 0;
   bool force_only = false;
-  double rise = -1, climb = -1, growth = -1, level = -1, backup = -1;  // < 0: the shipped values
+  double noise = -1, rise = -1, climb = -1, pause = -1, growth = -1, level = -1,
+         backup = -1;  // < 0: the shipped values
   std::FILE* dump = nullptr;
   std::FILE* raw_runs = nullptr;
   std::FILE* raw_samples = nullptr;
@@ -108,10 +111,14 @@ int main(int argc, char** argv) {
       rise = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-climb") == 0 && more) {
       climb = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-pause") == 0 && more) {
+      pause = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-growth") == 0 && more) {
       growth = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-level") == 0 && more) {
       level = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-noise") == 0 && more) {
+      noise = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-backup") == 0 && more) {
       backup = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
@@ -142,8 +149,8 @@ int main(int argc, char** argv) {
                    "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
                    "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose] "
                    "[--dump FILE.csv] [--dump-samples STEM] [--force-only] [--vibration-rise X] "
-                   "[--vibration-climb X] [--vibration-growth X] "
-                   "[--vibration-level X] [--vibration-backup X] "
+                   "[--vibration-climb X] [--vibration-pause X] [--vibration-growth X] "
+                   "[--vibration-level X] [--vibration-backup X] [--vibration-noise N] "
                    "[--mill-model FILE]\n",
                    argv[0]);
       return 2;
@@ -173,14 +180,17 @@ int main(int argc, char** argv) {
     if (force_only) ep.vibration_mode_count = 0;
     if (rise >= 0) ep.chatter_vibration_rise = rise;
     if (climb >= 0) ep.chatter_vibration_climb = climb;
+    if (pause >= 0) ep.chatter_vibration_pause = pause;
     if (growth >= 0) ep.chatter_vibration_growth = growth;
     if (level >= 0) ep.chatter_vibration_level = level;
     if (backup >= 0) ep.chatter_vibration_backup = backup;
+    if (noise >= 0) ep.vibration_sensor_noise_rms_n = noise;
   };
   // E's rules off: the run that labels a cut.
   const bool e_muted = threshold_override >= 1;
   auto mute = [](EdgeParameters& ep) {
-    ep.chatter_vibration_rise = ep.chatter_vibration_climb = ep.chatter_vibration_level = HUGE_VAL;
+    ep.chatter_vibration_rise = ep.chatter_vibration_climb = ep.chatter_vibration_pause =
+        ep.chatter_vibration_level = HUGE_VAL;
     ep.chatter_vibration_backup = ep.chatter_threshold = 2;  // S is a share: at most 1
   };
   // One cut on the simulated mill, E listening or not.
@@ -205,13 +215,16 @@ int main(int argc, char** argv) {
   if (estimate) {
     std::printf(
         "module E: the vibration estimated from the wideband F_y through %d y modes (the "
-        "channel's %.0f Hz filter undone), q = RMS(v_k - v_k-1) / RMS(v_k): chatter when q "
-        "exceeds %.2f and rises, then rises again, or exceeds %.2f and rises three times in a "
-        "row (each rise by more than x%.2f), or exceeds %.2f in 3; or when S, the "
-        "non-harmonic share of F_z energy, exceeds %.2f in 3",
-        shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz, shown.chatter_vibration_rise,
-        shown.chatter_vibration_climb, shown.chatter_vibration_growth,
-        shown.chatter_vibration_level, shown.chatter_vibration_backup);
+        "channel's %.0f Hz filter undone, %.1f N rms of its noise taken out), q = RMS(v_k - "
+        "v_k-1) / RMS(v_k): chatter when q exceeds %.2f and rises, then rises again, or "
+        "exceeds %.2f and rises three times in a row, or exceeds %.2f and rises, holds above "
+        "it, then passes where it rose to (each rise by more than x%.2f), or exceeds %.2f in "
+        "3; or when S, the non-harmonic share of F_z energy, exceeds %.2f in 3",
+        shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
+        shown.vibration_sensor_noise_rms_n, shown.chatter_vibration_rise,
+        shown.chatter_vibration_climb, shown.chatter_vibration_pause,
+        shown.chatter_vibration_growth, shown.chatter_vibration_level,
+        shown.chatter_vibration_backup);
   } else {
     std::printf(
         "module E: threshold %.2f on S, the non-harmonic share of F_z energy, %d revolutions "

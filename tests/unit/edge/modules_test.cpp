@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include "edge_test_config.hpp"
 #include "smc/edge/program.hpp"
@@ -485,10 +486,12 @@ Signals wide_revolution(AutomaticChatterDetector& e, const EdgeParameters& p, in
 
 // The paper mill's y modes (cell/models/paper_face_mill.textproto), as the
 // shipped configurations give them to E.
+// The synthetic channels here are noise-free: E takes no noise out.
 EdgeParameters with_y_modes(EdgeParameters p) {
   p.vibration_mode_count = 2;
   p.vibration_modes[0] = {4100, 0.11, 14000};
   p.vibration_modes[1] = {2100, 0.22, 9500};
+  p.vibration_sensor_noise_rms_n = 0;
   return p;
 }
 
@@ -655,7 +658,9 @@ TEST(AutomaticChatterDetector, TheEstimateReadsTheStructuresOwnChatterShare) {
     ++compared;
   }
   EXPECT_EQ(compared, 6);
-  EXPECT_LT(worst, 0.1);  // leakage of a tone between bins: up to 7 % here
+  std::printf("E's q against the structure's: worst relative error %.3f (channel at %.0f Hz)\n",
+              worst, p.vibration_sensor_cutoff_hz);
+  EXPECT_LT(worst, 0.1);  // leakage of a tone between bins
 }
 
 // Entering the part, the cut's pattern grows from one revolution to the next,
@@ -1518,4 +1523,84 @@ TEST(SpindleSpeedChatterSuppressor, HoldsUntilTheSpindleIsAtSpeedOrTimesOut) {
   ASSERT_EQ(o.update(s), Status::kOk);
   EXPECT_TRUE(s.speed_change_done);
   EXPECT_EQ(s.spindle_speed_cmd_rpm, 0);
+}
+
+// The onset's pause: q rises past `pause`, holds above it for a revolution
+// (here it falls a little), then passes where it rose to. E fires on the
+// revolution that passes it; without the pause rule it waits for two rises
+// in a row.
+TEST(AutomaticChatterDetector, AGrowthThatPausesForARevolutionIsChatter) {
+  auto run = [](const EdgeParameters& p, std::vector<double>* q) {
+    AutomaticChatterDetector e;
+    e.configure(p);
+    int k0 = 0;
+    for (int r = 0; r < 6; ++r) wide_revolution(e, p, k0, 0, 0);
+    // The 640 Hz tone's amplitude, revolution by revolution (it turns
+    // through 0.6 of a cycle a revolution, so its change is about twice
+    // its size).
+    const double chatter[] = {12, 24, 10, 40, 52, 66};
+    for (int r = 0; r < static_cast<int>(std::size(chatter)); ++r) {
+      const Signals s = wide_revolution(e, p, k0, 0, chatter[r]);
+      q->push_back(s.chatter_vibration_ratio);
+      if (s.chatter_detected) return r;
+    }
+    return -1;
+  };
+  const EdgeParameters p = with_y_modes(params());
+  std::vector<double> q;
+  ASSERT_EQ(run(p, &q), 3);
+  EXPECT_GT(q[1], p.chatter_vibration_pause) << "rose past pause";
+  EXPECT_GT(q[1], q[0] * p.chatter_vibration_growth);
+  EXPECT_GT(q[2], p.chatter_vibration_pause) << "held above it";
+  EXPECT_LT(q[2], q[1]) << "without rising";
+  EXPECT_GT(q[3], q[1] * p.chatter_vibration_growth) << "then passed where it rose to";
+  EXPECT_LT(q[2], p.chatter_vibration_rise) << "the rise rule could not fire";
+  EdgeParameters no_pause = p;
+  no_pause.chatter_vibration_pause = HUGE_VAL;
+  std::vector<double> ignored;
+  const int later = run(no_pause, &ignored);
+  EXPECT_TRUE(later < 0 || later > 3) << later;
+}
+
+// The channel's white noise passes through the structure's modes into the
+// estimate and differs from one revolution to the next: in a cut that
+// repeats itself it reads as change. E takes its expected share out of
+// both energies (operation.wideband_noise_rms_n): q of a repeating cut
+// under 2 N rms of noise then reads about what it reads without noise.
+TEST(AutomaticChatterDetector, TheChannelsNoiseIsTakenOutOfTheEstimate) {
+  auto median_q = [](const EdgeParameters& p, double noise_n) {
+    AutomaticChatterDetector e;
+    e.configure(p);
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> noise(0.0, noise_n);
+    Signals s;
+    s.spindle_rpm = 1500;
+    s.engagement = 1;
+    s.revolution_samples = p.samples_per_revolution;
+    std::vector<double> q;
+    int k0 = 0;
+    for (int r = 0; r < 60; ++r) {
+      for (int k = 0; k < p.samples_per_revolution; ++k, ++k0) {
+        const double t = k0 * p.sample_period_s;
+        const double tooth = std::sin(2 * std::numbers::pi * 100 * t);
+        s.sample.f_z_n = 300 + 80 * tooth;
+        // A light cut (60 N of tooth force): the noise's share is large.
+        s.sample.f_y_wide_n = 100 + 60 * tooth + noise(rng);
+        e.on_sample(s);
+      }
+      e.update(s);
+      if (r >= 3) q.push_back(s.chatter_vibration_ratio);
+    }
+    std::sort(q.begin(), q.end());
+    return q[q.size() / 2];
+  };
+  const EdgeParameters quiet = with_y_modes(params());
+  EdgeParameters told = quiet;
+  told.vibration_sensor_noise_rms_n = 2;
+  const double untold = median_q(quiet, 2), taken_out = median_q(told, 2);
+  std::printf("median q under 2 N rms of noise: %.4f as read, %.4f with it taken out\n", untold,
+              taken_out);
+  EXPECT_GT(untold, 0.03) << "the noise reads as change";
+  EXPECT_LT(taken_out, 0.3 * untold);
+  EXPECT_LT(median_q(quiet, 0), 1e-6) << "a repeating cut without noise does not change";
 }

@@ -101,6 +101,21 @@ TEST(Parameters, TheWidebandCutoffDefaultsToTheFzChannelsAndABadOneIsRefused) {
   EXPECT_NE(why.find("supervisor_config.operation.wideband_cutoff_hz"), std::string::npos) << why;
 }
 
+TEST(Parameters, TheWidebandNoiseIsTheShippedChannelsAndABadOneIsRefused) {
+  auto cfg = shipped("smc2.textproto");
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_noise_rms_n, 2);
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_cutoff_hz, 500);
+  EXPECT_EQ(cfg.simulation().f_y_wide_cutoff_hz(), 500) << "the simulated channel E is told of";
+  cfg.mutable_operation()->set_wideband_noise_rms_n(0);
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_noise_rms_n, 0) << "none taken out";
+  for (const double bad : {-1.0, std::nan(""), 1e4}) {
+    cfg.mutable_operation()->set_wideband_noise_rms_n(bad);
+    const std::string why = refusal(cfg);
+    EXPECT_NE(why.find("supervisor_config.operation.wideband_noise_rms_n"), std::string::npos)
+        << bad << ": " << why;
+  }
+}
+
 TEST(Validate, ShippedConfigurationsAreValidAndCarryTheirBoundGrafcet) {
   for (const char* name :
        {"no_control.textproto", "smc1.textproto", "smc1_guarded.textproto", "smc2.textproto"}) {

@@ -95,7 +95,9 @@ class OperatorChatterDetector final : public Module {
 // a step in the cut (the mean F_z rising more than a tenth beyond the
 // engagement's rise). d is then set by the rules of
 // Parameters::chatter_vibration_* (q rising past `rise`, or past `climb`
-// for longer; q above `level`; or S above `backup`); without the channel,
+// for longer, or past `pause` with a revolution's pause; q above `level`;
+// or S above `backup`), both energies less the channel's expected noise
+// (Parameters::vibration_sensor_noise_rms_n); without the channel,
 // by S above `chatter_threshold` in `chatter_confirm_revolutions`
 // consecutive judged revolutions. It stays set until reset.
 class AutomaticChatterDetector final : public Module {
@@ -127,7 +129,7 @@ class AutomaticChatterDetector final : public Module {
   // H the y modes, H_held their discretisation with the force held over a
   // sample period, L the wideband channel's anti-alias filter; at most
   // kMaxCorrection. Real-time safe.
-  double vibration_correction(double frequency_hz) const noexcept;
+  double vibration_correction(double frequency_hz, double* held_norm = nullptr) const noexcept;
 
   // The statistic for the first `samples` samples of the buffer: one
   // revolution (also used by tests and the detector study). 0 for a count

@@ -37,7 +37,8 @@
 //                              edge from this period on (as the simulated
 //                              mill's simulation.tooth_breaks); 0: none
 //   out float force-x/y/z      force on the tool (N), filtered, with noise
-//   out float force-y-wide     F_y through F_z's wideband filter, with noise
+//   out float force-y-wide     F_y through the wideband filter
+//                              (simulation.f_y_wide_cutoff_hz), with noise
 //                              from a stream of its own (the simulated mill's
 //                              f_y_wide_n)
 //   out bit   wideband         true: this sensor has the wideband F_y channel
@@ -195,7 +196,8 @@ std::unique_ptr<Dyno> make_dyno() {
   d->lp_x.configure(s.f_y_cutoff_hz(), rate);
   d->lp_y.configure(s.f_y_cutoff_hz(), rate);
   d->lp_z.configure(s.f_z_cutoff_hz(), rate);
-  d->lp_y_wide.configure(s.f_z_cutoff_hz(), rate);
+  d->lp_y_wide.configure(s.f_y_wide_cutoff_hz() > 0 ? s.f_y_wide_cutoff_hz() : s.f_z_cutoff_hz(),
+                         rate);
   d->noise_rms_n = std::max(0.0, s.noise_rms_n());
   d->rng.seed(static_cast<std::uint64_t>(seed));
   // Derived from the seed and different from it, as the simulated mill's.

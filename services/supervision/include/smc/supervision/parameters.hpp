@@ -114,18 +114,25 @@ struct Parameters {
   // Butterworth), whose attenuation module E's estimate undoes
   // (operation.wideband_cutoff_hz; 0 there: 1000 Hz, the F_z channel's).
   double vibration_sensor_cutoff_hz = 1000;
+  // The wideband F_y channel's noise (N rms, white after the filter), whose
+  // expected share module E takes out of both energies of q
+  // (operation.wideband_noise_rms_n; 0: none).
+  double vibration_sensor_noise_rms_n = 0;
   // Module E's rules on the estimated vibration's change from one revolution
   // to the next (not in the configuration message: the detector study's
   // values; the study overrides them to try others). Chatter when it exceeds
   // `rise` and grows, then grows again, over judged revolutions; or exceeds
-  // `climb` and grows three times in a row (growing: by more than `growth`
-  // x the revolution before); or exceeds `level` in three in a row; or when
+  // `climb` and grows three times in a row; or exceeds `pause` and grows,
+  // stays above it a revolution, then passes where it grew to (growing: by
+  // more than `growth` x the revolution before); or exceeds `level` in
+  // three in a row; or when
   // F_z's non-harmonic share exceeds `backup` in three (chatter locked to a
   // spindle harmonic repeats every revolution, and only F_z's spectrum shows
   // it once grown).
   double chatter_vibration_rise = 0.22;
-  double chatter_vibration_climb = 0.16;
-  double chatter_vibration_growth = 1.02;
+  double chatter_vibration_climb = 0.14;
+  double chatter_vibration_pause = 0.18;
+  double chatter_vibration_growth = 1.01;
   double chatter_vibration_level = 0.8;
   double chatter_vibration_backup = 0.7;
 
