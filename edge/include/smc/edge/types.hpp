@@ -49,7 +49,7 @@ struct ForceSample {
   double f_x_n = 0;
   double f_y_n = 0;  // after the F_y anti-alias filter
   double f_z_n = 0;  // after the F_z anti-alias filter
-  // F_y once more, through the F_z channel's wideband filter rather than
+  // F_y once more, through a wideband filter of its own rather than
   // F_y's (250 Hz for the force controller, which leaves the tool's mode
   // little of its force): module E estimates the tool-part vibration from
   // it. NaN when the sensor has no such channel; E then judges F_z alone.

@@ -23,7 +23,7 @@ struct HalRecord {
   double x_mm = 0, y_mm = 0, z_mm = 0;  // joint positions (feedback)
   double velocity_mm_s = 0;             // motion.current-vel (path speed)
   std::int32_t program_line = 0;        // motion.program-line
-  double fy_wide_n = 0;                 // smc-force-y-wide: F_y through F_z's wideband filter
+  double fy_wide_n = 0;                 // smc-force-y-wide: F_y through the wideband filter
   bool fy_wide_present = false;         // smc-force-y-wide-present: the sensor has that channel
   std::uint32_t sample_no = 0;          // the sampler's count
 };

@@ -6,9 +6,10 @@
 // (forces A1-A5 and the axial force, the structure's modes, the regenerative
 // chip) over that period, and writes the force a dynamometer would read to
 // its pins, through the same anti-alias filters and noise as the simulated
-// mill's sensor (F_y also a second time through F_z's wideband filter, for
-// module E's vibration estimate). Run it in the servo thread before the edge's sampler: the
-// force the edge reads in a period is that of the motion of the same period.
+// mill's sensor (F_y also a second time through the wideband channel's
+// filter, for module E's vibration estimate). Run it in the servo thread
+// before the edge's sampler: the force the edge reads in a period is that of
+// the motion of the same period.
 //
 // The part: the configuration's workpiece (X0 its leading edge, Y0 the
 // cutter axis, Z0 its top face; deploy/linuxcnc/README.md), a fresh blank
