@@ -153,15 +153,15 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   for (size_t k = 0; k < bins; ++k) {
     const bool single = k == 0 || (n % 2 == 0 && k == n / 2);
     const double f = static_cast<double>(k) * df;
-    double held = 0;
-    const double c = (single ? 1.0 : 2.0) * vibration_correction(f, &held);
+    double held_norm = 0;  // |H_held|^2: the noise's path into the estimate
+    const double c = (single ? 1.0 : 2.0) * vibration_correction(f, &held_norm);
     changed += c * std::norm(change[k]);
     energy += c * std::norm(now[k]);
     if (noise > 0) {
       const double wt = 2 * std::numbers::pi * f * p_.sample_period_s;
       const double delayed = std::norm(std::polar(w, -wt) + (1 - w));
-      noise_energy += c * noise_bin * held;
-      noise_changed += c * noise_bin * held * (1 + delayed);
+      noise_energy += c * noise_bin * held_norm;
+      noise_changed += c * noise_bin * held_norm * (1 + delayed);
     }
   }
   changed = std::max(changed - noise_changed, 0.0);

@@ -120,15 +120,18 @@ class AutomaticChatterDetector final : public Module {
 
   // q for the revolution that ended with the last sample, `samples` long,
   // against the one before at `period_samples` (the measured speed's
-  // revolution in samples); NaN when the estimate does not cover both.
-  // Real-time safe after configure().
+  // revolution in samples), both energies less the channel's expected noise
+  // (a change below it reads 0); NaN when the estimate does not cover both,
+  // or the noise's share is all of the energy. Real-time safe after
+  // configure().
   double vibration_ratio(int samples, double period_samples) noexcept;
 
   // The factor that takes a bin of the estimate's energy at this frequency
   // to the structure's: |H(j omega)|^2 / (|H_held(e^(j omega T))|^2 |L(j omega)|^2),
   // H the y modes, H_held their discretisation with the force held over a
   // sample period, L the wideband channel's anti-alias filter; at most
-  // kMaxCorrection. Real-time safe.
+  // kMaxCorrection. `held_norm`, when given, receives |H_held|^2 (white
+  // noise on the channel reaches the estimate through it). Real-time safe.
   double vibration_correction(double frequency_hz, double* held_norm = nullptr) const noexcept;
 
   // The statistic for the first `samples` samples of the buffer: one
