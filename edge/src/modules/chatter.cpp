@@ -289,8 +289,17 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       // grows), then past where it rose to.
       const double hold = p_.chatter_vibration_pause;
       const bool pausing = q2_ > hold && q2_ > g * q3_ && q1_ > hold && q > g * q2_;
+      // Uneven growth: above `net` three revolutions in a row, grown by
+      // half (`net_growth`) over the revolution before them and past the
+      // first of them, never falling by more than `net_dip` on the way (q
+      // alternating as it grows, or the estimate's error of a few per
+      // cent breaking a rise).
+      const double floor = p_.chatter_vibration_net, keep = 1 - p_.chatter_vibration_net_dip;
+      const bool net = q3_ > 0 && q2_ > floor && q1_ > floor && q > floor &&
+                       q > p_.chatter_vibration_net_growth * q3_ && q > q2_ && q1_ >= keep * q2_ &&
+                       q >= keep * q1_;
       q_above_ = q > p_.chatter_vibration_level ? q_above_ + 1 : 0;
-      if (rising || climbing || pausing || q_above_ >= kVibrationConfirm) {
+      if (rising || climbing || pausing || net || q_above_ >= kVibrationConfirm) {
         s.chatter_detected = true;
       }
       q3_ = q2_;

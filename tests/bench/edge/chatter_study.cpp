@@ -5,7 +5,8 @@
 //       [--widths 25,37,50] [--fractions 0.3,0.6,0.9,1.3,1.8] [--runouts 0,10,20]
 //       [--quick] [--verbose] [--dump FILE.csv] [--dump-samples STEM]
 //       [--force-only] [--vibration-rise X] [--vibration-climb X] [--vibration-pause X]
-//       [--vibration-growth X] [--vibration-level X] [--vibration-backup X]
+//       [--vibration-growth X] [--vibration-net X] [--vibration-net-growth X]
+//       [--vibration-net-dip X] [--vibration-level X] [--vibration-backup X]
 //       [--vibration-noise N] [--mill-model FILE]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
@@ -93,8 +94,8 @@ int main(int argc, char** argv) {
   double threshold_override = 0;
   int confirm_override = 0;
   bool force_only = false;
-  double noise = -1, rise = -1, climb = -1, pause = -1, growth = -1, level = -1,
-         backup = -1;  // < 0: the shipped values
+  double noise = -1, rise = -1, climb = -1, pause = -1, growth = -1, net = -1, net_growth = -1,
+         net_dip = -1, level = -1, backup = -1;  // < 0: the shipped values
   std::FILE* dump = nullptr;
   std::FILE* raw_runs = nullptr;
   std::FILE* raw_samples = nullptr;
@@ -115,6 +116,12 @@ int main(int argc, char** argv) {
       pause = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-growth") == 0 && more) {
       growth = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-net") == 0 && more) {
+      net = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-net-growth") == 0 && more) {
+      net_growth = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-net-dip") == 0 && more) {
+      net_dip = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-level") == 0 && more) {
       level = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-noise") == 0 && more) {
@@ -150,6 +157,7 @@ int main(int argc, char** argv) {
                    "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose] "
                    "[--dump FILE.csv] [--dump-samples STEM] [--force-only] [--vibration-rise X] "
                    "[--vibration-climb X] [--vibration-pause X] [--vibration-growth X] "
+                   "[--vibration-net X] [--vibration-net-growth X] [--vibration-net-dip X] "
                    "[--vibration-level X] [--vibration-backup X] [--vibration-noise N] "
                    "[--mill-model FILE]\n",
                    argv[0]);
@@ -182,6 +190,9 @@ int main(int argc, char** argv) {
     if (climb >= 0) ep.chatter_vibration_climb = climb;
     if (pause >= 0) ep.chatter_vibration_pause = pause;
     if (growth >= 0) ep.chatter_vibration_growth = growth;
+    if (net >= 0) ep.chatter_vibration_net = net;
+    if (net_growth >= 0) ep.chatter_vibration_net_growth = net_growth;
+    if (net_dip >= 0) ep.chatter_vibration_net_dip = net_dip;
     if (level >= 0) ep.chatter_vibration_level = level;
     if (backup >= 0) ep.chatter_vibration_backup = backup;
     if (noise >= 0) ep.vibration_sensor_noise_rms_n = noise;
@@ -190,7 +201,7 @@ int main(int argc, char** argv) {
   const bool e_muted = threshold_override >= 1;
   auto mute = [](EdgeParameters& ep) {
     ep.chatter_vibration_rise = ep.chatter_vibration_climb = ep.chatter_vibration_pause =
-        ep.chatter_vibration_level = HUGE_VAL;
+        ep.chatter_vibration_net = ep.chatter_vibration_level = HUGE_VAL;
     ep.chatter_vibration_backup = ep.chatter_threshold = 2;  // S is a share: at most 1
   };
   // One cut on the simulated mill, E listening or not.
@@ -219,12 +230,14 @@ int main(int argc, char** argv) {
         "v_k-1) / RMS(v_k): chatter when q exceeds %.2f and rises, then rises again, or "
         "exceeds %.2f and rises three times in a row, or exceeds %.2f and rises, holds above "
         "it, then passes where it rose to (each rise by more than x%.2f), or exceeds %.2f in "
-        "3; or when S, the non-harmonic share of F_z energy, exceeds %.2f in 3",
+        "3 with the last x%.2f the one before them and none falling by more than %.0f%%, or "
+        "exceeds %.2f in 3; or when S, the non-harmonic share of F_z energy, exceeds %.2f in 3",
         shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
         shown.vibration_sensor_noise_rms_n, shown.chatter_vibration_rise,
         shown.chatter_vibration_climb, shown.chatter_vibration_pause,
-        shown.chatter_vibration_growth, shown.chatter_vibration_level,
-        shown.chatter_vibration_backup);
+        shown.chatter_vibration_growth, shown.chatter_vibration_net,
+        shown.chatter_vibration_net_growth, 100 * shown.chatter_vibration_net_dip,
+        shown.chatter_vibration_level, shown.chatter_vibration_backup);
   } else {
     std::printf(
         "module E: threshold %.2f on S, the non-harmonic share of F_z energy, %d revolutions "

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <numbers>
 #include <random>
 
@@ -493,6 +494,27 @@ EdgeParameters with_y_modes(EdgeParameters p) {
   p.vibration_modes[1] = {2100, 0.22, 9500};
   p.vibration_sensor_noise_rms_n = 0;
   return p;
+}
+
+// Six quiet revolutions, then a 640 Hz tone of these amplitudes, one a
+// revolution (it turns through 0.6 of a cycle a revolution, so its change
+// is about twice its size, and q follows the amplitude and the one
+// before): the revolution E first detects chatter on (-1: none), and q of
+// each revolution up to it.
+int first_detection(const EdgeParameters& p, std::initializer_list<double> chatter,
+                    std::vector<double>* q) {
+  AutomaticChatterDetector e;
+  e.configure(p);
+  int k0 = 0;
+  for (int r = 0; r < 6; ++r) wide_revolution(e, p, k0, 0, 0);
+  int r = 0;
+  for (const double amplitude : chatter) {
+    const Signals s = wide_revolution(e, p, k0, 0, amplitude);
+    q->push_back(s.chatter_vibration_ratio);
+    if (s.chatter_detected) return r;
+    ++r;
+  }
+  return -1;
 }
 
 }  // namespace
@@ -1526,25 +1548,12 @@ TEST(SpindleSpeedChatterSuppressor, HoldsUntilTheSpindleIsAtSpeedOrTimesOut) {
 }
 
 // The onset's pause: q rises past `pause`, holds above it for a revolution
-// (here it falls a little), then passes where it rose to. E fires on the
-// revolution that passes it; without the pause rule it waits for two rises
-// in a row.
+// (here it falls by a sixth: more than the net rule lets it), then passes
+// where it rose to. E fires on the revolution that passes it; without the
+// pause rule it waits for two rises in a row.
 TEST(AutomaticChatterDetector, AGrowthThatPausesForARevolutionIsChatter) {
   auto run = [](const EdgeParameters& p, std::vector<double>* q) {
-    AutomaticChatterDetector e;
-    e.configure(p);
-    int k0 = 0;
-    for (int r = 0; r < 6; ++r) wide_revolution(e, p, k0, 0, 0);
-    // The 640 Hz tone's amplitude, revolution by revolution (it turns
-    // through 0.6 of a cycle a revolution, so its change is about twice
-    // its size).
-    const double chatter[] = {12, 24, 10, 40, 52, 66};
-    for (int r = 0; r < static_cast<int>(std::size(chatter)); ++r) {
-      const Signals s = wide_revolution(e, p, k0, 0, chatter[r]);
-      q->push_back(s.chatter_vibration_ratio);
-      if (s.chatter_detected) return r;
-    }
-    return -1;
+    return first_detection(p, {14, 32, 3, 50, 60, 75}, q);
   };
   const EdgeParameters p = with_y_modes(params());
   std::vector<double> q;
@@ -1555,11 +1564,38 @@ TEST(AutomaticChatterDetector, AGrowthThatPausesForARevolutionIsChatter) {
   EXPECT_LT(q[2], q[1]) << "without rising";
   EXPECT_GT(q[3], q[1] * p.chatter_vibration_growth) << "then passed where it rose to";
   EXPECT_LT(q[2], p.chatter_vibration_rise) << "the rise rule could not fire";
+  EXPECT_LT(q[2], (1 - p.chatter_vibration_net_dip) * q[1]) << "nor the net rule";
   EdgeParameters no_pause = p;
   no_pause.chatter_vibration_pause = HUGE_VAL;
   std::vector<double> ignored;
   const int later = run(no_pause, &ignored);
   EXPECT_TRUE(later < 0 || later > 3) << later;
+}
+
+// Uneven growth: q passes `net`, falls back a little in the next
+// revolution (q alternating as it grows, or the estimate's error of a few
+// per cent), then grows past half again what it was before. Neither the
+// rise (no revolution above `rise`), the climb (no three rises in a row)
+// nor the pause (below `pause`) fires on it; the net rule fires on the
+// third revolution above `net`.
+TEST(AutomaticChatterDetector, AnUnevenGrowthIsChatterOnTheThirdRevolution) {
+  auto run = [](const EdgeParameters& p, std::vector<double>* q) {
+    return first_detection(p, {5, 13, 17, 9, 34, 50}, q);
+  };
+  const EdgeParameters p = with_y_modes(params());
+  std::vector<double> q;
+  ASSERT_EQ(run(p, &q), 4);
+  EXPECT_LT(q[1], p.chatter_vibration_net) << "the revolution before";
+  for (size_t r = 2; r <= 4; ++r) EXPECT_GT(q[r], p.chatter_vibration_net) << r;
+  EXPECT_LT(q[3], q[2]) << "fell back";
+  EXPECT_GT(q[3], (1 - p.chatter_vibration_net_dip) * q[2]) << "by less than net_dip";
+  EXPECT_GT(q[4], p.chatter_vibration_net_growth * q[1]) << "grown by half";
+  EXPECT_LT(std::max(q[2], q[3]), p.chatter_vibration_rise) << "the rise rule could not fire";
+  EXPECT_LT(q[2], p.chatter_vibration_pause) << "nor the pause rule";
+  EdgeParameters no_net = p;
+  no_net.chatter_vibration_net = HUGE_VAL;
+  std::vector<double> ignored;
+  EXPECT_EQ(run(no_net, &ignored), 5) << "the rise rule, a revolution later";
 }
 
 // The channel's white noise passes through the structure's modes into the

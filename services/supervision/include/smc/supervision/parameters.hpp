@@ -124,8 +124,10 @@ struct Parameters {
   // `rise` and grows, then grows again, over judged revolutions; or exceeds
   // `climb` and grows three times in a row; or exceeds `pause` and grows,
   // stays above it a revolution, then passes where it grew to (growing: by
-  // more than `growth` x the revolution before); or exceeds `level` in
-  // three in a row; or when
+  // more than `growth` x the revolution before); or exceeds `net` in three
+  // in a row, the last more than `net_growth` x the one before them and
+  // above the first of them, none below (1 - `net_dip`) x the one before
+  // it; or exceeds `level` in three in a row; or when
   // F_z's non-harmonic share exceeds `backup` in three (chatter locked to a
   // spindle harmonic repeats every revolution, and only F_z's spectrum shows
   // it once grown).
@@ -133,6 +135,9 @@ struct Parameters {
   double chatter_vibration_climb = 0.14;
   double chatter_vibration_pause = 0.18;
   double chatter_vibration_growth = 1.01;
+  double chatter_vibration_net = 0.135;
+  double chatter_vibration_net_growth = 1.5;
+  double chatter_vibration_net_dip = 0.15;
   double chatter_vibration_level = 0.8;
   double chatter_vibration_backup = 0.7;
 
