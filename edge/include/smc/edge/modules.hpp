@@ -95,8 +95,9 @@ class OperatorChatterDetector final : public Module {
 // a step in the cut (the mean F_z rising more than a tenth beyond the
 // engagement's rise). d is then set by the rules of
 // Parameters::chatter_vibration_* (q rising past `rise`, or past `climb`
-// for longer, or past `pause` with a revolution's pause; q above `level`;
-// or S above `backup`), both energies less the channel's expected noise
+// for longer, or past `pause` with a revolution's pause, or above `net`
+// three times while growing by half; q above `level`; or S above
+// `backup`), both energies less the channel's expected noise
 // (Parameters::vibration_sensor_noise_rms_n); without the channel,
 // by S above `chatter_threshold` in `chatter_confirm_revolutions`
 // consecutive judged revolutions. It stays set until reset.
