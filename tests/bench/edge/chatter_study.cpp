@@ -229,7 +229,7 @@ int main(int argc, char** argv) {
         "channel's %.0f Hz filter undone, %.1f N rms of its noise taken out), q = RMS(v_k - "
         "v_k-1) / RMS(v_k): chatter when q exceeds %.2f and rises, then rises again, or "
         "exceeds %.2f and rises three times in a row, or exceeds %.2f and rises, holds above "
-        "it, then passes where it rose to (each rise by more than x%.2f), or exceeds %.2f in "
+        "it, then passes where it rose to (each rise by more than x%.2f), or exceeds %.3f in "
         "3 with the last x%.2f the one before them and none falling by more than %.0f%%, or "
         "exceeds %.2f in 3; or when S, the non-harmonic share of F_z energy, exceeds %.2f in 3",
         shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
