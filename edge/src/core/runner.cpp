@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "smc/edge/fractional_delay.hpp"
 #include "smc_config.pb.h"
 
 namespace smc::edge {
@@ -124,9 +125,14 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
   }
   const size_t revs = starts.size() - 1;
   out.resize(revs);
+  FractionalDelay delay;
+  delay.set(0, FractionalDelay::kMaxHalf);
   // Per revolution: the statistic, and whether it is comparable with the
-  // revolution before. The vibration one revolution earlier is interpolated
-  // between samples when a revolution is not a whole number of them.
+  // revolution before. The vibration one revolution earlier is read between
+  // samples, when a revolution is not a whole number of them, through a
+  // band-limited fractional delay (as module E reads its estimate):
+  // linear interpolation reads a repeating vibration near the tool mode as
+  // a change of up to half of it.
   for (size_t r = 0; r < revs; ++r) {
     RevolutionChange& c = out[r];
     c.first_sample = starts[r];
@@ -143,10 +149,17 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
       }
       const auto j = static_cast<size_t>(back);
       const double w = back - static_cast<double>(j);
+      // As many taps each side as the trace has (all of them but at its
+      // start).
+      const auto half = static_cast<int>(std::min<size_t>(
+          {static_cast<size_t>(FractionalDelay::kMaxHalf), j + 1, run.samples.size() - 1 - j}));
+      if (w > 0 && half < 1) {
+        ok = false;
+        continue;
+      }
+      if (w != delay.fraction() || half != delay.half()) delay.set(w, half);
       const TraceSample& before = run.samples[j];
-      const TraceSample& after = run.samples[std::min(j + 1, k)];
-      const double v_before = w > 0 ? (1 - w) * before.vibration_y_mm + w * after.vibration_y_mm
-                                    : before.vibration_y_mm;
+      const double v_before = delay.at([&](size_t i) { return run.samples[i].vibration_y_mm; }, j);
       if (std::isnan(now.vibration_y_mm) || std::isnan(v_before)) return {};
       // A hold or the end of the pass that begins within this revolution
       // (a reaction to it) ends the comparison there; one in force at its

@@ -39,7 +39,7 @@ void AutomaticChatterDetector::configure(const EdgeParameters& p) {
   // The vibration estimate: each y mode discretised exactly at the sample
   // period (as the simulated mill discretises its own structure); a ring
   // holding this revolution and the one before, at the slowest supervised
-  // speed, with room for the interpolation.
+  // speed, with room for the fractional delay's taps.
   mode_count_ = 0;
   for (int i = 0; i < std::min(p.vibration_mode_count, EdgeParameters::kMaxVibrationModes); ++i) {
     const auto& m = p.vibration_modes[i];
@@ -49,9 +49,11 @@ void AutomaticChatterDetector::configure(const EdgeParameters& p) {
     VibrationMode& v = modes_[static_cast<size_t>(mode_count_++)];
     v = VibrationMode{d.p11, d.p12, d.p21, d.p22, d.g1, d.g2, 0, 0};
   }
-  vibration_.assign(mode_count_ > 0 ? 2 * most + 4 : 0, 0.0);
+  vibration_.assign(mode_count_ > 0 ? 2 * most + 2 * FractionalDelay::kMaxHalf + 4 : 0, 0.0);
   vibration_buffer_.assign(mode_count_ > 0 ? most : 0, 0.0);
   vibration_spectrum_.assign(mode_count_ > 0 ? 2 * (most / 2 + 1) : 0, {});
+  delay_gain_.assign(mode_count_ > 0 ? most / 2 + 1 : 0, 1.0);
+  delay_gain_n_ = 0;
   reset();
 }
 
@@ -123,7 +125,16 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   if (static_cast<size_t>(samples) > vibration_buffer_.size()) return nan;
   // This revolution and the one before, back to the sample before the first
   // one it interpolates, must lie in the unbroken run and in the ring.
-  const auto reach = static_cast<uint64_t>(samples) + static_cast<uint64_t>(period_samples) + 2;
+  const auto whole = static_cast<uint64_t>(period_samples);
+  const double w = period_samples - static_cast<double>(whole);
+  // The revolution before, at the same angle: a band-limited fractional
+  // delay (linear interpolation reads a repeating vibration near the tool
+  // mode as a change of up to half of it), its taps reaching no further
+  // than this revolution's first sample.
+  const int half = static_cast<int>(std::min<uint64_t>(FractionalDelay::kMaxHalf, whole));
+  if (half < 1) return nan;
+  delay_.set(w > 0 ? 1 - w : 0, half);
+  const auto reach = static_cast<uint64_t>(samples) + whole + static_cast<uint64_t>(half) + 1;
   if (reach > vibration_run_ || reach > vibration_.size()) return nan;
   const uint64_t size = vibration_.size();
   auto at = [&](uint64_t k) { return vibration_[static_cast<size_t>(k % size)]; };
@@ -131,15 +142,13 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   const size_t bins = n / 2 + 1;
   std::complex<double>* change = vibration_spectrum_.data();
   std::complex<double>* now = change + bins;
-  // The change: v at k less v at k - period, between samples k - whole - 1
-  // and k - whole.
+  // The change: v at k less v at k - period, (1 - w) past sample k - whole
+  // - 1 (or sample k - whole itself).
   const uint64_t first = vibration_at_ - static_cast<uint64_t>(samples);
-  const auto whole = static_cast<uint64_t>(period_samples);
-  const double w = period_samples - static_cast<double>(whole);
+  const uint64_t back = w > 0 ? whole + 1 : whole;
   for (size_t i = 0; i < n; ++i) {
     const uint64_t k = first + i;
-    const double before = w > 0 ? w * at(k - whole - 1) + (1 - w) * at(k - whole) : at(k - whole);
-    vibration_buffer_[i] = at(k) - before;
+    vibration_buffer_[i] = at(k) - delay_.at(at, k - back);
   }
   fft_->fft.fwd(change, vibration_buffer_.data(), static_cast<Eigen::Index>(n));
   for (size_t i = 0; i < n; ++i) vibration_buffer_[i] = at(first + i);
@@ -150,6 +159,18 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   const double noise = p_.vibration_sensor_noise_rms_n;
   const double noise_bin = static_cast<double>(n) * noise * noise;
   double changed = 0, energy = 0, noise_changed = 0, noise_energy = 0;
+  // The delay's power gain per bin, for the noise through it: kept while
+  // the revolution's size and the point between samples hold.
+  if (noise > 0 && (delay_gain_n_ != n || delay_gain_u_ != delay_.fraction() ||
+                    delay_gain_half_ != delay_.half())) {
+    delay_gain_n_ = n;
+    delay_gain_u_ = delay_.fraction();
+    delay_gain_half_ = delay_.half();
+    for (size_t k = 0; k < bins; ++k) {
+      delay_gain_[k] = delay_.gain_squared(2 * std::numbers::pi * static_cast<double>(k) * df *
+                                           p_.sample_period_s);
+    }
+  }
   for (size_t k = 0; k < bins; ++k) {
     const bool single = k == 0 || (n % 2 == 0 && k == n / 2);
     const double f = static_cast<double>(k) * df;
@@ -158,8 +179,7 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
     changed += c * std::norm(change[k]);
     energy += c * std::norm(now[k]);
     if (noise > 0) {
-      const double wt = 2 * std::numbers::pi * f * p_.sample_period_s;
-      const double delayed = std::norm(std::polar(w, -wt) + (1 - w));
+      const double delayed = delay_gain_[k];
       noise_energy += c * noise_bin * held_norm;
       noise_changed += c * noise_bin * held_norm * (1 + delayed);
     }

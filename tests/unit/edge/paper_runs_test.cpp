@@ -929,6 +929,39 @@ RunResult scaled_revolutions(const std::vector<double>& q, double rpm, int sampl
 
 }  // namespace
 
+// A vibration that repeats every revolution, with spindle orders near the
+// tool mode, at 1194 rpm: a revolution is 100.5 samples of 0.5 ms, and the
+// revolution before is read half a sample from the nearest one. It is no
+// change (linear interpolation read q 0.17 here: the 33rd order, 657 Hz,
+// came back at half its amplitude).
+TEST(ChatterLabel, AVibrationThatRepeatsBetweenSamplesIsNoChange) {
+  RunResult run;
+  const double dt = 0.0005, rpm = 60.0 / (100.5 * dt), order_hz = rpm / 60;
+  for (int k = 0; k < 3000; ++k) {
+    TraceSample s{};
+    s.t_s = dt * k;
+    s.spindle_rpm = rpm;
+    auto order = [&](double n, double shift) {
+      return std::sin(2 * M_PI * n * order_hz * s.t_s + shift);
+    };
+    s.vibration_y_mm = 0.02 + 0.01 * order(4, 0.5) + 0.004 * order(8, 0.2) +
+                       0.006 * order(31, 1.0) + 0.01 * order(33, 0.3);
+    s.engagement = 1;
+    s.in_pass = true;
+    s.contact = true;
+    run.samples.push_back(s);
+  }
+  const auto changes = vibration_change(run, 0.04);
+  ASSERT_GE(changes.size(), 25u);
+  double most = 0;
+  for (size_t r = 1; r < changes.size(); ++r) {
+    EXPECT_TRUE(changes[r].comparable) << r;
+    // (The first has few samples before it to read between.)
+    if (r >= 2) most = std::max(most, changes[r].q);
+  }
+  EXPECT_LT(most, 0.005);
+}
+
 TEST(ChatterLabel, TheOnsetLevelIsTheLargestThresholdAtWhichARevolutionIsTheOnset) {
   // Revolution:  0  1     2     3     4     5     6     7     8     9
   const std::vector<double> q{0, 0.02, 0.10, 0.149, 0.16, 0.12, 0.14, 0.20, 0.17, 0.25};

@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "smc/edge/fractional_delay.hpp"
 #include "smc/edge/module.hpp"
 #include "smc/edge/program.hpp"
 
@@ -85,7 +86,8 @@ class OperatorChatterDetector final : public Module {
 // the configuration the machine's y modes, E also estimates the tool-part
 // vibration v from it, sample by sample, through those modes, and judges
 // q = RMS(v_k - v_{k-1}) / RMS(v_k) over each revolution, the revolution
-// before taken at the same spindle angle (interpolated between samples):
+// before taken at the same spindle angle (between samples, a band-limited
+// fractional delay: fractional_delay.hpp):
 // runout repeats and cancels, and the structure smooths the entry's edges
 // out of v. Both energies are summed bin by bin over the revolution's
 // spectrum, each bin corrected for what holding the force over a sample
@@ -167,6 +169,11 @@ class AutomaticChatterDetector final : public Module {
   std::vector<double> vibration_;                         // the ring
   std::vector<double> vibration_buffer_;                  // one revolution, for its FFT
   std::vector<std::complex<double>> vibration_spectrum_;  // the change's bins, then v's
+  FractionalDelay delay_;           // the revolution before, at the same spindle angle
+  std::vector<double> delay_gain_;  // its power gain per bin (for the noise)
+  size_t delay_gain_n_ = 0;         // for revolutions of this size,
+  double delay_gain_u_ = -1;        // this point between samples
+  int delay_gain_half_ = 0;         // and this many taps
   static constexpr double kMaxCorrection = 25;
   uint64_t vibration_at_ = 0;        // samples written to it
   uint64_t vibration_run_ = 0;       // of which the last ones in an unbroken run
