@@ -32,7 +32,10 @@
 // (N rms; the configuration's operation.wideband_noise_rms_n otherwise). --mill-model FILE: the
 // simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
-// critical depths keep the configuration's. After the tables: the label's
+// critical depths keep the configuration's. After the tables: the unstable
+// cuts E caught late or missed, each with the mill's own q around its onset
+// (how long it stayed above the onset's threshold, and how high it went
+// after); the label's
 // own margin (the largest onset level of a stable cut and the smallest of
 // an unstable cut's onset, in the mill's q: smc/edge/runner.hpp,
 // vibration_change), and E's q against the mill's on the labelling runs'
@@ -82,6 +85,17 @@ struct Cell {
   uint64_t stable_revs = 0, exceed = 0;
   int within3 = 0;
   double stable_max = 0, stable_max_q = 0, worst_delay_revs = 0, unstable_min_peak = 1e9;
+};
+
+// An unstable cut E caught late or missed, with the mill's own q around its
+// onset (the labelling run's): what kind of onset it was.
+struct LateCut {
+  double rpm = 0, width = 0, runout = 0, fraction = 0;
+  int seed = 0;
+  double delay_revs = -1;  // -1: missed
+  std::vector<double> q;   // the mill's q from the revolution before the onset, up to 6
+  int above = 0;           // revolutions from the onset on with q above the onset's 0.15
+  double later_most = 0;   // the largest q after those, to the end of the pass
 };
 
 }  // namespace
@@ -262,6 +276,7 @@ int main(int argc, char** argv) {
   // unstable cut's onset; and E's estimate of q against the mill's own, on
   // the revolutions near the threshold, by speed.
   double stable_level = 0, unstable_level = HUGE_VAL;
+  std::vector<LateCut> late;
   std::map<double, std::vector<double>> estimate_error;  // rpm -> q_E / q
   const double still_period_s = base.operation().slow_period_s();
   for (double rpm : speeds) {
@@ -332,6 +347,27 @@ int main(int argc, char** argv) {
                 stable_level = std::max(stable_level, cut_level);
               } else {
                 unstable_level = std::min(unstable_level, cut_level);
+                const double delay =
+                    first_detection >= 0 ? (first_detection - onset) * rpm / 60.0 : -1;
+                if (delay < 0 ? first_detection < 0 : delay > 3.0) {
+                  LateCut lc{rpm, width, runout, fraction, seed, delay, {}, 0, 0};
+                  size_t at = 0;
+                  while (at < changes.size() && !(changes[at].onset_level > kChatterOnsetQ)) ++at;
+                  for (size_t r = at > 0 ? at - 1 : 0; r < changes.size() && r <= at + 5; ++r) {
+                    lc.q.push_back(changes[r].comparable ? changes[r].q : -1);
+                  }
+                  size_t r = at;
+                  while (r < changes.size() && changes[r].comparable &&
+                         changes[r].q > kChatterOnsetQ) {
+                    ++lc.above;
+                    ++r;
+                  }
+                  for (; r < changes.size(); ++r) {
+                    if (changes[r].comparable)
+                      lc.later_most = std::max(lc.later_most, changes[r].q);
+                  }
+                  late.push_back(lc);
+                }
               }
               // E's revolutions end on the trace's (both count the same
               // clock): pair each judged one with the trace's that ends there.
@@ -479,6 +515,34 @@ int main(int argc, char** argv) {
       all.false_detections == 0 && all.detected == all.unstable_runs && all.worst_delay_revs <= 3.0;
   std::printf("goal (0 false detections, every unstable cut within 3 revolutions): %s\n",
               pass ? "met" : "NOT met");
+  if (!late.empty()) {
+    std::printf(
+        "\nunstable cuts caught late or missed: the mill's own q from the revolution before the "
+        "onset (- not comparable), the revolutions from the onset on above %.2f, and the largest "
+        "q after them to the end of the pass\n%6s %6s %6s %8s %4s %7s  %-47s %5s %6s\n",
+        kChatterOnsetQ, "rpm", "width", "runout", "fraction", "seed", "delay", "mill's q", "above",
+        "later");
+    for (const auto& lc : late) {
+      std::string qs;
+      char one[16];
+      for (const double q : lc.q) {
+        if (q < 0) {
+          std::snprintf(one, sizeof one, "%6s ", "-");
+        } else {
+          std::snprintf(one, sizeof one, "%6.3f ", q);
+        }
+        qs += one;
+      }
+      char delay[16];
+      if (lc.delay_revs < 0) {
+        std::snprintf(delay, sizeof delay, "%s", "missed");
+      } else {
+        std::snprintf(delay, sizeof delay, "%.0f", lc.delay_revs);
+      }
+      std::printf("%6.0f %6.0f %6.0f %8.2f %4d %7s  %-47s %5d %6.3f\n", lc.rpm, lc.width, lc.runout,
+                  lc.fraction, lc.seed, delay, qs.c_str(), lc.above, lc.later_most);
+    }
+  }
   std::printf(
       "\nthe label's own margin, in the mill's q: the largest onset level of a stable cut %.4f, "
       "the smallest of an unstable cut's onset %.4f (threshold %.2f)\n",

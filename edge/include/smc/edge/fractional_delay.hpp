@@ -67,8 +67,8 @@ class FractionalDelay {
     if (!(u_ > 0)) return value(j0);
     double v = 0;
     for (int i = 0; i < 2 * half_; ++i) {
-      v += taps_[static_cast<size_t>(i)] * value(j0 + static_cast<Index>(i) -
-                                                 static_cast<Index>(half_ - 1));
+      v += taps_[static_cast<size_t>(i)] *
+           value(j0 + static_cast<Index>(i) - static_cast<Index>(half_ - 1));
     }
     return v;
   }
