@@ -150,13 +150,9 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
       const auto j = static_cast<size_t>(back);
       const double w = back - static_cast<double>(j);
       // As many taps each side as the trace has (all of them but at its
-      // start).
+      // start; j is at least a sample before the trace's last).
       const auto half = static_cast<int>(std::min<size_t>(
           {static_cast<size_t>(FractionalDelay::kMaxHalf), j + 1, run.samples.size() - 1 - j}));
-      if (w > 0 && half < 1) {
-        ok = false;
-        continue;
-      }
       if (w != delay.fraction() || half != delay.half()) delay.set(w, half);
       const TraceSample& before = run.samples[j];
       const double v_before = delay.at([&](size_t i) { return run.samples[i].vibration_y_mm; }, j);

@@ -129,8 +129,8 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   const double w = period_samples - static_cast<double>(whole);
   // The revolution before, at the same angle: a band-limited fractional
   // delay (linear interpolation reads a repeating vibration near the tool
-  // mode as a change of up to half of it), its taps reaching no further
-  // than this revolution's first sample.
+  // mode as a change of up to half of it), with no more taps each side
+  // than a revolution has samples, so that none reaches past the newest.
   const int half = static_cast<int>(std::min<uint64_t>(FractionalDelay::kMaxHalf, whole));
   if (half < 1) return nan;
   delay_.set(w > 0 ? 1 - w : 0, half);
