@@ -101,6 +101,7 @@ struct SimulatedMill::Impl {
     // The filters take the force of each internal step, not one more
     // evaluation at the sample instant.
     so.forces_at_sample_instant = false;
+    so.regenerative = !o.no_regeneration();
     return so;
   }
 

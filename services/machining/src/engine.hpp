@@ -255,13 +255,14 @@ class CutEngine {
   }
 
   // Forces at the current instant (the end of the last step), for sampled
-  // outputs: exact displacement now, delayed value interpolated.
+  // outputs: exact displacement now, delayed value interpolated
+  // (regenerative = false: the nominal chip, as step()'s).
   StepForces forces_now(double c0, double s0, double tool_x_mm, bool check_length,
-                        double delay_steps) const noexcept {
+                        double delay_steps, bool regenerative = true) const noexcept {
     double ux, uy;
     structure_.relative(ux, uy);
-    double dx, dy;
-    delayed(static_cast<double>(count_) - 0.5 - delay_steps, dx, dy);
+    double dx = ux, dy = uy;
+    if (regenerative) delayed(static_cast<double>(count_) - 0.5 - delay_steps, dx, dy);
     return tooth_forces(c0, s0, tool_x_mm, check_length, ux - dx, uy - dy);
   }
 

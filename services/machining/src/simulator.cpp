@@ -166,7 +166,8 @@ std::uint32_t MillSimulator::Impl::step(Impl& s, const SampleInput& input, Sampl
   double max_abs_fy = 0;
   detail::StepForces last;
   for (int k = 0; k < s.steps_per_sample; ++k) {
-    last = s.engine.step(c0, s0, s.position_mm + dx / 2, true, delay_steps, half_sweep);
+    last = s.engine.step(c0, s0, s.position_mm + dx / 2, true, delay_steps, half_sweep,
+                         s.options.regenerative);
     if (trace != nullptr) {
       const auto i = static_cast<std::size_t>(k);
       trace->fx_n[i] = last.fx_n;
@@ -208,7 +209,8 @@ std::uint32_t MillSimulator::Impl::step(Impl& s, const SampleInput& input, Sampl
   // Outputs at the sample instant.
   detail::StepForces now = last;
   if (s.options.forces_at_sample_instant) {
-    now = s.engine.forces_now(s.dir_c, s.dir_s, s.position_mm, true, delay_steps);
+    now = s.engine.forces_now(s.dir_c, s.dir_s, s.position_mm, true, delay_steps,
+                              s.options.regenerative);
   }
   const Displacements d = s.engine.structure().displacements();
   out.time_s = static_cast<double>(s.samples) * s.options.sample_period_s;

@@ -7,7 +7,7 @@
 //       [--force-only] [--vibration-rise X] [--vibration-climb X] [--vibration-pause X]
 //       [--vibration-growth X] [--vibration-net X] [--vibration-net-growth X]
 //       [--vibration-net-dip X] [--vibration-level X] [--vibration-backup X]
-//       [--vibration-noise N] [--mill-model FILE]
+//       [--vibration-noise N] [--mill-model FILE] [--no-regeneration]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
@@ -32,7 +32,11 @@
 // (N rms; the configuration's operation.wideband_noise_rms_n otherwise). --mill-model FILE: the
 // simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
-// critical depths keep the configuration's. After the tables: the unstable
+// critical depths keep the configuration's. --no-regeneration: the mill
+// cuts every chip at its nominal thickness (simulation.no_regeneration), so
+// no cut can chatter and the vibration is the forced response alone: every
+// onset the label finds then is one it should not, and every detection a
+// false one. After the tables: the unstable
 // cuts E caught late or missed, each with the mill's own q around its onset
 // (how long it stayed above the onset's threshold, and how high it went
 // after); the label's
@@ -108,6 +112,7 @@ int main(int argc, char** argv) {
   double threshold_override = 0;
   int confirm_override = 0;
   bool force_only = false;
+  bool no_regeneration = false;
   double noise = -1, rise = -1, climb = -1, pause = -1, growth = -1, net = -1, net_growth = -1,
          net_dip = -1, level = -1, backup = -1;  // < 0: the shipped values
   std::FILE* dump = nullptr;
@@ -122,6 +127,8 @@ int main(int argc, char** argv) {
       threshold_override = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--force-only") == 0) {
       force_only = true;
+    } else if (std::strcmp(argv[i], "--no-regeneration") == 0) {
+      no_regeneration = true;
     } else if (std::strcmp(argv[i], "--vibration-rise") == 0 && more) {
       rise = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-climb") == 0 && more) {
@@ -173,7 +180,7 @@ int main(int argc, char** argv) {
                    "[--vibration-climb X] [--vibration-pause X] [--vibration-growth X] "
                    "[--vibration-net X] [--vibration-net-growth X] [--vibration-net-dip X] "
                    "[--vibration-level X] [--vibration-backup X] [--vibration-noise N] "
-                   "[--mill-model FILE]\n",
+                   "[--mill-model FILE] [--no-regeneration]\n",
                    argv[0]);
       return 2;
     }
@@ -195,6 +202,7 @@ int main(int argc, char** argv) {
         static_cast<uint32_t>(confirm_override));
   }
   if (threshold_override > 0) base.mutable_operation()->set_chatter_threshold(threshold_override);
+  if (no_regeneration) base.mutable_simulation()->set_no_regeneration(true);
   const double fpt = 0.1;
   // The study's rules on E's parameters (the configuration message does not
   // carry the vibration rules).
@@ -260,10 +268,13 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "; band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms; programmed %.2f mm/tooth, %d "
-      "seeds; the mill: %s\n\n",
+      "seeds; the mill: %s%s\n\n",
       base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
       base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(), fpt, seeds,
-      mill_model_file.empty() ? "the configuration's model" : mill_model_file.c_str());
+      mill_model_file.empty() ? "the configuration's model" : mill_model_file.c_str(),
+      no_regeneration ? ", without regeneration (no cut can chatter: every onset the label "
+                        "finds is the forced response's)"
+                      : "");
   std::printf("%6s %6s %6s %8s %6s %9s %8s %8s %8s %8s %8s %9s %8s %10s\n", "rpm", "width",
               "runout", "crit_mm", "runs", "stable", "revs", "S_above", "false", "max_S", "max_q",
               "unstable", "within3", "delay_rev");

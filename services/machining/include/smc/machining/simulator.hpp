@@ -48,6 +48,11 @@ struct SimulatorOptions {
   // evaluated at its middle), which saves one force evaluation per call:
   // for callers that filter the force themselves (see StepForceTrace).
   bool forces_at_sample_instant = true;
+  // false: every chip is the nominal one, the vibration's marks on the
+  // surface never cut again: a mill on which chatter cannot start, whose
+  // vibration is the forced response alone (the chatter detector study's
+  // --no-regeneration tells the two apart with it).
+  bool regenerative = true;
 };
 
 // What the mill commands for one sample.
