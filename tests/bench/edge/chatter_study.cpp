@@ -99,7 +99,7 @@ struct LateCut {
   double delay_revs = -1;  // -1: missed
   std::vector<double> q;   // the mill's q from the revolution before the onset, up to 6
   int above = 0;           // revolutions from the onset on with q above the onset's 0.15
-  double later_most = 0;   // the largest q after those, to the end of the pass
+  double later_most = -1;  // the largest q after those, to the end of the pass (-1: none)
 };
 
 }  // namespace
@@ -361,7 +361,7 @@ int main(int argc, char** argv) {
                 const double delay =
                     first_detection >= 0 ? (first_detection - onset) * rpm / 60.0 : -1;
                 if (delay < 0 ? first_detection < 0 : delay > 3.0) {
-                  LateCut lc{rpm, width, runout, fraction, seed, delay, {}, 0, 0};
+                  LateCut lc{rpm, width, runout, fraction, seed, delay, {}, 0, -1};
                   size_t at = 0;
                   while (at < changes.size() && !(changes[at].onset_level > kChatterOnsetQ)) ++at;
                   for (size_t r = at > 0 ? at - 1 : 0; r < changes.size() && r <= at + 5; ++r) {
@@ -530,7 +530,8 @@ int main(int argc, char** argv) {
     std::printf(
         "\nunstable cuts caught late or missed: the mill's own q from the revolution before the "
         "onset (- not comparable), the revolutions from the onset on above %.2f, and the largest "
-        "q after them to the end of the pass\n%6s %6s %6s %8s %4s %7s  %-47s %5s %6s\n",
+        "q after them to the end of the pass (- none: it lasted to the end)\n%6s %6s %6s %8s %4s "
+        "%7s  %-47s %5s %6s\n",
         kChatterOnsetQ, "rpm", "width", "runout", "fraction", "seed", "delay", "mill's q", "above",
         "later");
     for (const auto& lc : late) {
@@ -550,8 +551,15 @@ int main(int argc, char** argv) {
       } else {
         std::snprintf(delay, sizeof delay, "%.0f", lc.delay_revs);
       }
-      std::printf("%6.0f %6.0f %6.0f %8.2f %4d %7s  %-47s %5d %6.3f\n", lc.rpm, lc.width, lc.runout,
-                  lc.fraction, lc.seed, delay, qs.c_str(), lc.above, lc.later_most);
+      // Nothing after the excursion: it lasted to the end of the pass.
+      char later[16];
+      if (lc.later_most < 0) {
+        std::snprintf(later, sizeof later, "%s", "-");
+      } else {
+        std::snprintf(later, sizeof later, "%.3f", lc.later_most);
+      }
+      std::printf("%6.0f %6.0f %6.0f %8.2f %4d %7s  %-47s %5d %6s\n", lc.rpm, lc.width, lc.runout,
+                  lc.fraction, lc.seed, delay, qs.c_str(), lc.above, later);
     }
   }
   std::printf(
