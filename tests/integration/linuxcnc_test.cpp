@@ -365,6 +365,37 @@ EstimateSeen estimate_seen(const std::string& path) {
   return {static_cast<int>(q.size()), q[q.size() / 2]};
 }
 
+// Samples in contact; those of them whose tool vibration (vibration_y_mm:
+// what the chatter label reads) is known, and known and not 0 (as written,
+// to 1 nm).
+struct VibrationSeen {
+  int in_contact = 0, known = 0, nonzero = 0;
+};
+VibrationSeen vibration_seen(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  const std::vector<std::string> header = csv_fields(line);
+  const auto v_at = std::find(header.begin(), header.end(), "vibration_y_mm");
+  const auto pass_at = std::find(header.begin(), header.end(), "contact");
+  if (v_at == header.end() || pass_at == header.end()) {
+    ADD_FAILURE() << path << ": no vibration_y_mm or contact column in '" << line << "'";
+    return {};
+  }
+  const auto v_col = static_cast<std::size_t>(v_at - header.begin());
+  const auto pass_col = static_cast<std::size_t>(pass_at - header.begin());
+  VibrationSeen seen;
+  while (std::getline(in, line)) {
+    const std::vector<std::string> f = csv_fields(line);
+    if (f.size() <= std::max(v_col, pass_col) || f[pass_col] != "1") continue;
+    ++seen.in_contact;
+    const double v = std::strtod(f[v_col].c_str(), nullptr);
+    if (std::isfinite(v)) ++seen.known;
+    if (std::isfinite(v) && v != 0) ++seen.nonzero;
+  }
+  return seen;
+}
+
 double monotonic_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -1058,14 +1089,20 @@ TEST_F(LinuxCncCell, AJobForAMillInEStopFailsWithTheReason) {
 //    once per revolution; LinuxCNC's feed reaches the part along its own
 //    acceleration ramp, which moves the contact by a fraction of a
 //    revolution;
+//  - the chatter label: the virtual dynamometer's vibration
+//    (smc-vibration-y) reaches the trace in every sample in contact, so
+//    the run's summary labels chatter's onset on LinuxCNC as the simulated
+//    mill's does from its own. The onset and E's delay from it are printed,
+//    not compared: at LinuxCNC's 1503 rpm the paper's chatter (750 Hz)
+//    pulls onto the spindle's 30th order as it grows, the revolution-to-
+//    revolution change the label reads falls back after two revolutions,
+//    and in some runs the label finds no onset (deploy/linuxcnc/README.md);
 //  - overshoot: within 15 points of F_ref: the peak is reached while
 //    chatter grows, and LinuxCNC's hold decelerates (20 ms at 10 mm/s);
 //  - steady-state error of the passes that did not chatter: within 0.5
 //    points;
 //  - cycle time: longer by LinuxCNC's spindle start, approach and the
 //    rewrite's stop, abort, retract and restart, at most 6 s + 4 s.
-// Chatter onset needs the tool's vibration, which only the simulated mill
-// knows, so the detection is compared from contact.
 TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   int st = -1;
   const std::string out = simulate(src("edge/configs/smc2.textproto"), "lcnc", &st, 120);
@@ -1084,6 +1121,9 @@ TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   ASSERT_GT(sim.passes_size(), 0);
   const double lc_detect = lc.chatter_detected_s() - lc.passes(0).contact_s();
   const double sim_detect = sim.chatter_detected_s() - sim.passes(0).contact_s();
+  std::printf("LinuxCNC / simulated: chatter onset %.3f / %.3f s, detected %.3f / %.3f s\n",
+              lc.chatter_onset_s(), sim.chatter_onset_s(), lc.chatter_detected_s(),
+              sim.chatter_detected_s());
   std::printf(
       "LinuxCNC / simulated: passes %u / %u, rewrites %u / %u, chatter detected %.3f / "
       "%.3f s after contact, overshoot %.1f / %.1f %%, cycle %.1f / %.1f s\n",
@@ -1095,6 +1135,17 @@ TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   EXPECT_EQ(lc.program_rewrites(), sim.program_rewrites());
   EXPECT_GT(sim_detect, 0);
   EXPECT_NEAR(lc_detect, sim_detect, 0.2);
+  const auto seen = vibration_seen((dir_ / "lcnc" / "samples.csv").string());
+  EXPECT_GT(seen.in_contact, 10000) << "LinuxCNC's run cut for 5 s and more";
+  EXPECT_EQ(seen.known, seen.in_contact) << "samples in contact without the vibration";
+  // (A vibration that crosses 0 reads 0 to 1 nm now and then.)
+  EXPECT_GT(seen.nonzero, 0.99 * seen.in_contact) << "the dynamometer's vibration is undriven";
+  // E's delay from the onset, in revolutions at the paper's 1500 rpm.
+  const double rev_s = 60.0 / 1500;
+  std::printf("E's delay from the onset: LinuxCNC %.2f (%s), simulated %.2f revolutions\n",
+              (lc.chatter_detected_s() - lc.chatter_onset_s()) / rev_s,
+              lc.chatter_onset_s() > 0 ? "onset labelled" : "no onset labelled",
+              (sim.chatter_detected_s() - sim.chatter_onset_s()) / rev_s);
   EXPECT_NEAR(lc.overshoot_pct(), sim.overshoot_pct(), 15.0);
   for (int i = 0; i < lc.passes_size() && i < sim.passes_size(); ++i) {
     if (lc.passes(i).chatter() || sim.passes(i).chatter()) continue;

@@ -156,12 +156,19 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
       if (w != delay.fraction() || half != delay.half()) delay.set(w, half);
       const TraceSample& before = run.samples[j];
       const double v_before = delay.at([&](size_t i) { return run.samples[i].vibration_y_mm; }, j);
-      if (std::isnan(now.vibration_y_mm) || std::isnan(v_before)) return {};
       // A hold or the end of the pass that begins within this revolution
       // (a reaction to it) ends the comparison there; one in force at its
       // start, or in the revolution before, makes it not comparable.
       const bool stopped = !now.in_pass || (now.active & hold) != 0;
       if (stopped && k > starts[r]) break;
+      // A sample without the vibration (a drive that has none, or a gap:
+      // LinuxCNC's first periods before the sampler's first record) makes
+      // its revolution, and the one that reads it as the one before, not
+      // comparable; the rest of the trace is judged.
+      if (std::isnan(now.vibration_y_mm) || std::isnan(v_before)) {
+        ok = false;
+        continue;
+      }
       ok = ok && !stopped && before.in_pass && now.engagement > kMinEngagement &&
            before.engagement > kMinEngagement && now.engagement >= before.engagement &&
            (before.active & hold) == 0;

@@ -962,6 +962,27 @@ TEST(ChatterLabel, AVibrationThatRepeatsBetweenSamplesIsNoChange) {
   EXPECT_LT(most, 0.005);
 }
 
+// A gap in the vibration (LinuxCNC's first servo periods, before the
+// sampler's first record, carry none) makes the revolutions that read it
+// not comparable; the rest of the trace is still judged. (A single gap used
+// to leave the whole run without a label.)
+TEST(ChatterLabel, AGapInTheVibrationLeavesTheRestOfTheRunJudged) {
+  const std::vector<double> q{0, 0.02, 0.03, 0.02, 0.16, 0.20, 0.25, 0.30};
+  auto run = scaled_revolutions(q, 1500, 80);
+  run.samples[3].vibration_y_mm = std::nan("");
+  const auto changes = vibration_change(run, 0.04);
+  ASSERT_EQ(changes.size(), q.size());
+  EXPECT_FALSE(changes[1].comparable) << "it reads the gap as the revolution before";
+  for (size_t r = 2; r < q.size(); ++r) {
+    EXPECT_TRUE(changes[r].comparable) << r;
+    EXPECT_NEAR(changes[r].q, q[r], 1e-9) << r;
+  }
+  EXPECT_NEAR(changes[4].onset_level, 0.16, 1e-9);
+  // A trace with no vibration at all has no revolution to judge.
+  for (auto& s : run.samples) s.vibration_y_mm = std::nan("");
+  for (const auto& c : vibration_change(run, 0.04)) EXPECT_FALSE(c.comparable);
+}
+
 TEST(ChatterLabel, TheOnsetLevelIsTheLargestThresholdAtWhichARevolutionIsTheOnset) {
   // Revolution:  0  1     2     3     4     5     6     7     8     9
   const std::vector<double> q{0, 0.02, 0.10, 0.149, 0.16, 0.12, 0.14, 0.20, 0.17, 0.25};

@@ -20,8 +20,9 @@ struct DriveSample {
   double x_mm = 0;                             // tool position along the feed
   double spindle_power_w = __builtin_nan("");  // NaN when the drive cannot tell
   // Relative tool-part vibration in y (mm), when the drive knows it (the
-  // simulated mill does; a real machine would need an extra sensor): NaN
-  // otherwise. Used only to find chatter onset as ground truth in studies.
+  // simulated mill does, and LinuxCNC with the virtual dynamometer; a real
+  // machine would need an extra sensor): NaN otherwise. Used only to find
+  // chatter onset as ground truth in studies and run summaries.
   double vibration_y_mm = __builtin_nan("");
   // Share of the full-width engagement arc in cut (0 in air, 1 when the
   // cutter is fully in the part); NaN when the drive cannot tell.

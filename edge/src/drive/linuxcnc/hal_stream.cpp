@@ -125,7 +125,7 @@ HalSampleStream::~HalSampleStream() {
 
 bool HalSampleStream::read(HalRecord& out) noexcept {
   if (!hal_stream_readable(&impl_->stream)) return false;
-  hal_stream_data d[12];
+  hal_stream_data d[14];
   unsigned no = 0;
   if (hal_stream_read(&impl_->stream, d, &no) < 0) return false;
   out.fx_n = d[0].f;
@@ -140,6 +140,8 @@ bool HalSampleStream::read(HalRecord& out) noexcept {
   out.program_line = d[9].s;
   out.fy_wide_n = d[10].f;
   out.fy_wide_present = d[11].b;
+  out.vibration_y_mm = d[12].f;
+  out.vibration_present = d[13].b;
   out.sample_no = no;
   if (records_ > 0) {
     if (no == last_no_) {

@@ -25,10 +25,12 @@ struct HalRecord {
   std::int32_t program_line = 0;        // motion.program-line
   double fy_wide_n = 0;                 // smc-force-y-wide: F_y through the wideband filter
   bool fy_wide_present = false;         // smc-force-y-wide-present: the sensor has that channel
+  double vibration_y_mm = 0;            // smc-vibration-y: the tool's vibration (the virtual
+  bool vibration_present = false;       // dynamometer's; smc-vibration-y-present: driven)
   std::uint32_t sample_no = 0;          // the sampler's count
 };
 
-inline constexpr const char* kRecordTypes = "fffffffffsfb";
+inline constexpr const char* kRecordTypes = "fffffffffsfbfb";
 // LinuxCNC 2.9's sampler stream key for channel 0 (rtapi_shmkeys.h,
 // SAMPLER_SHMEM_KEY); channel n is key + n.
 inline constexpr int kSamplerKey = 0x48534130;

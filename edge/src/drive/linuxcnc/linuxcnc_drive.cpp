@@ -452,6 +452,10 @@ Status LinuxCncDrive::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   out.force = ForceSample{
       static_cast<double>(d.ticks) * d.period_s, d.rec.fx_n, d.rec.fy_n, d.rec.fz_n,
       d.rec.fy_wide_present ? d.rec.fy_wide_n : std::numeric_limits<double>::quiet_NaN()};
+  // The tool's vibration where the machine has it (the virtual
+  // dynamometer's, for the chatter label); NaN where it has none.
+  out.vibration_y_mm =
+      d.rec.vibration_present ? d.rec.vibration_y_mm : std::numeric_limits<double>::quiet_NaN();
   out.spindle_rpm = d.rec.spindle_rps * 60.0;
   out.depth_mm = cur.depth_mm;
   out.programmed_feedrate_mm_s = cur.feedrate_mm_s;

@@ -43,6 +43,12 @@
 //                              from a stream of its own (the simulated mill's
 //                              f_y_wide_n)
 //   out bit   wideband         true: this sensor has the wideband F_y channel
+//   out float vibration-y-mm   the tool's vibration relative to the part in
+//                              y (mm), unfiltered and without noise: what
+//                              labels chatter independently of module E
+//                              (the simulated mill's vibration_y_mm; a
+//                              machine has no such signal)
+//   out bit   vibration        true: vibration-y-mm is driven
 //   out float power-w          spindle (cutting) power at the sample instant
 //   out float depth-mm         depth of cut at the cutter's leading edge
 //   out s32   teeth-in-cut
@@ -100,6 +106,8 @@ struct Pins {
   hal_float_t* force_z;
   hal_float_t* force_y_wide;
   hal_bit_t* wideband;
+  hal_float_t* vibration_y_mm;
+  hal_bit_t* vibration;
   hal_float_t* power_w;
   hal_float_t* depth_mm;
   hal_s32_t* teeth_in_cut;
@@ -283,6 +291,8 @@ void update(void* /*arg*/, long period) {
   *p.force_z = fz;
   *p.force_y_wide = fy_wide;
   *p.wideband = true;
+  *p.vibration_y_mm = smp.tool_y_mm - smp.part_y_mm;
+  *p.vibration = true;
   *p.power_w = smp.power_w;
   *p.depth_mm = in.depth_mm;
   *p.teeth_in_cut = smp.teeth_in_cut;
@@ -305,6 +315,8 @@ int make_pins(int comp) {
   r |= hal_pin_float_new("smc-dyno.force-z", HAL_OUT, &p.force_z, comp);
   r |= hal_pin_float_new("smc-dyno.force-y-wide", HAL_OUT, &p.force_y_wide, comp);
   r |= hal_pin_bit_new("smc-dyno.wideband", HAL_OUT, &p.wideband, comp);
+  r |= hal_pin_float_new("smc-dyno.vibration-y-mm", HAL_OUT, &p.vibration_y_mm, comp);
+  r |= hal_pin_bit_new("smc-dyno.vibration", HAL_OUT, &p.vibration, comp);
   r |= hal_pin_float_new("smc-dyno.power-w", HAL_OUT, &p.power_w, comp);
   r |= hal_pin_float_new("smc-dyno.depth-mm", HAL_OUT, &p.depth_mm, comp);
   r |= hal_pin_s32_new("smc-dyno.teeth-in-cut", HAL_OUT, &p.teeth_in_cut, comp);
