@@ -7,7 +7,7 @@
 //       [--force-only] [--vibration-rise X] [--vibration-climb X] [--vibration-pause X]
 //       [--vibration-growth X] [--vibration-net X] [--vibration-net-growth X]
 //       [--vibration-net-dip X] [--vibration-level X] [--vibration-backup X]
-//       [--vibration-noise N] [--mill-model FILE] [--no-regeneration]
+//       [--vibration-noise N] [--channel-noise N] [--mill-model FILE] [--no-regeneration]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
@@ -29,7 +29,11 @@
 // backup (edge/README.md, module E); --force-only takes the estimate away
 // (S alone, as on a sensor without that channel), --vibration-* set its
 // rules' parameters, and --vibration-noise the channel noise it takes out
-// (N rms; the configuration's operation.wideband_noise_rms_n otherwise). --mill-model FILE: the
+// (N rms; the configuration's operation.wideband_noise_rms_n otherwise).
+// --channel-noise N: the simulated dynamometer's white noise on every force
+// channel (simulation.noise_rms_n, 2 N rms in the configuration), and the
+// noise E takes out with it unless --vibration-noise says otherwise; 0 shows
+// what E's estimate does without it. --mill-model FILE: the
 // simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
 // critical depths keep the configuration's. --no-regeneration: the mill
@@ -113,8 +117,8 @@ int main(int argc, char** argv) {
   int confirm_override = 0;
   bool force_only = false;
   bool no_regeneration = false;
-  double noise = -1, rise = -1, climb = -1, pause = -1, growth = -1, net = -1, net_growth = -1,
-         net_dip = -1, level = -1, backup = -1;  // < 0: the shipped values
+  double noise = -1, channel_noise = -1, rise = -1, climb = -1, pause = -1, growth = -1, net = -1,
+         net_growth = -1, net_dip = -1, level = -1, backup = -1;  // < 0: the shipped values
   std::FILE* dump = nullptr;
   std::FILE* raw_runs = nullptr;
   std::FILE* raw_samples = nullptr;
@@ -147,6 +151,8 @@ int main(int argc, char** argv) {
       level = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-noise") == 0 && more) {
       noise = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--channel-noise") == 0 && more) {
+      channel_noise = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-backup") == 0 && more) {
       backup = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
@@ -180,7 +186,7 @@ int main(int argc, char** argv) {
                    "[--vibration-climb X] [--vibration-pause X] [--vibration-growth X] "
                    "[--vibration-net X] [--vibration-net-growth X] [--vibration-net-dip X] "
                    "[--vibration-level X] [--vibration-backup X] [--vibration-noise N] "
-                   "[--mill-model FILE] [--no-regeneration]\n",
+                   "[--channel-noise N] [--mill-model FILE] [--no-regeneration]\n",
                    argv[0]);
       return 2;
     }
@@ -203,6 +209,10 @@ int main(int argc, char** argv) {
   }
   if (threshold_override > 0) base.mutable_operation()->set_chatter_threshold(threshold_override);
   if (no_regeneration) base.mutable_simulation()->set_no_regeneration(true);
+  if (channel_noise >= 0) {
+    base.mutable_simulation()->set_noise_rms_n(channel_noise);
+    base.mutable_operation()->set_wideband_noise_rms_n(channel_noise);
+  }
   const double fpt = 0.1;
   // The study's rules on E's parameters (the configuration message does not
   // carry the vibration rules).
