@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <map>
 #include <memory>
 #include <optional>
@@ -307,29 +308,53 @@ std::vector<std::string> csv_fields(const std::string& line) {
   return f;
 }
 
+// A CSV file (the run's samples.csv or revolutions.csv) read row by row,
+// its columns found by their header's names. A missing column is a test
+// failure naming the file and the header, and the table then has no rows.
+class CsvTable {
+ public:
+  CsvTable(const std::string& path, std::initializer_list<const char*> names) : in_(path) {
+    std::string line;
+    std::getline(in_, line);
+    const std::vector<std::string> header = csv_fields(line);
+    for (const char* name : names) {
+      const auto it = std::find(header.begin(), header.end(), name);
+      if (it == header.end()) {
+        ADD_FAILURE() << path << ": no " << name << " column in '" << line << "'";
+        columns_.clear();
+        return;
+      }
+      columns_.push_back(static_cast<std::size_t>(it - header.begin()));
+      needed_ = std::max(needed_, columns_.back() + 1);
+    }
+  }
+  // The next row's fields, in the order of the names asked; false at the end.
+  bool next(std::vector<std::string>& out) {
+    if (columns_.empty()) return false;
+    std::string line;
+    while (std::getline(in_, line)) {
+      const std::vector<std::string> f = csv_fields(line);
+      if (f.size() < needed_) continue;
+      out.clear();
+      for (std::size_t c : columns_) out.push_back(f[c]);
+      return true;
+    }
+    return false;
+  }
+
+ private:
+  std::ifstream in_;
+  std::vector<std::size_t> columns_;
+  std::size_t needed_ = 0;
+};
+
 // The position of the cutter's axis (mm) in the last revolution of a run's
 // revolutions.csv in contact with F_Y above `force_n`: where its cut ended.
-// Columns are found by their header names (x_mm, f_y_peak_n, contact).
 double last_cutting_x(const std::string& path, double force_n) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  const std::vector<std::string> header = csv_fields(line);
-  auto column = [&](const char* name) {
-    const auto it = std::find(header.begin(), header.end(), name);
-    return it == header.end() ? header.size() : static_cast<std::size_t>(it - header.begin());
-  };
-  const std::size_t x = column("x_mm"), f_y = column("f_y_peak_n"), contact = column("contact");
-  const std::size_t needed = std::max({x, f_y, contact}) + 1;
-  if (needed > header.size()) {
-    ADD_FAILURE() << path << ": no x_mm, f_y_peak_n or contact column in '" << line << "'";
-    return -1;
-  }
+  CsvTable table(path, {"x_mm", "f_y_peak_n", "contact"});
   double last = -1;
-  while (std::getline(in, line)) {
-    const std::vector<std::string> f = csv_fields(line);
-    if (f.size() < needed) continue;
-    if (std::atof(f[f_y].c_str()) > force_n && f[contact] == "1") last = std::atof(f[x].c_str());
+  for (std::vector<std::string> r; table.next(r);) {
+    if (std::atof(r[1].c_str()) > force_n && r[2] == "1") last = std::atof(r[0].c_str());
   }
   return last;
 }
@@ -341,24 +366,11 @@ struct EstimateSeen {
   double median_q = 0;
 };
 EstimateSeen estimate_seen(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  const std::vector<std::string> header = csv_fields(line);
-  const auto q_at = std::find(header.begin(), header.end(), "chatter_vibration_ratio");
-  const auto contact_at = std::find(header.begin(), header.end(), "contact");
-  if (q_at == header.end() || contact_at == header.end()) {
-    ADD_FAILURE() << path << ": no chatter_vibration_ratio or contact column in '" << line << "'";
-    return {};
-  }
-  const auto q_col = static_cast<std::size_t>(q_at - header.begin());
-  const auto contact_col = static_cast<std::size_t>(contact_at - header.begin());
+  CsvTable table(path, {"chatter_vibration_ratio", "contact"});
   std::vector<double> q;
-  while (std::getline(in, line)) {
-    const std::vector<std::string> f = csv_fields(line);
-    if (f.size() <= std::max(q_col, contact_col) || f[contact_col] != "1") continue;
-    const double v = std::atof(f[q_col].c_str());
-    if (v > 0) q.push_back(v);
+  for (std::vector<std::string> r; table.next(r);) {
+    const double v = std::atof(r[0].c_str());
+    if (r[1] == "1" && v > 0) q.push_back(v);
   }
   if (q.empty()) return {};
   std::nth_element(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(q.size() / 2), q.end());
@@ -372,24 +384,12 @@ struct VibrationSeen {
   int in_contact = 0, known = 0, nonzero = 0;
 };
 VibrationSeen vibration_seen(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);
-  const std::vector<std::string> header = csv_fields(line);
-  const auto v_at = std::find(header.begin(), header.end(), "vibration_y_mm");
-  const auto pass_at = std::find(header.begin(), header.end(), "contact");
-  if (v_at == header.end() || pass_at == header.end()) {
-    ADD_FAILURE() << path << ": no vibration_y_mm or contact column in '" << line << "'";
-    return {};
-  }
-  const auto v_col = static_cast<std::size_t>(v_at - header.begin());
-  const auto pass_col = static_cast<std::size_t>(pass_at - header.begin());
+  CsvTable table(path, {"vibration_y_mm", "contact"});
   VibrationSeen seen;
-  while (std::getline(in, line)) {
-    const std::vector<std::string> f = csv_fields(line);
-    if (f.size() <= std::max(v_col, pass_col) || f[pass_col] != "1") continue;
+  for (std::vector<std::string> r; table.next(r);) {
+    if (r[1] != "1") continue;
     ++seen.in_contact;
-    const double v = std::strtod(f[v_col].c_str(), nullptr);
+    const double v = std::strtod(r[0].c_str(), nullptr);
     if (std::isfinite(v)) ++seen.known;
     if (std::isfinite(v) && v != 0) ++seen.nonzero;
   }
@@ -1093,10 +1093,11 @@ TEST_F(LinuxCncCell, AJobForAMillInEStopFailsWithTheReason) {
 //    (smc-vibration-y) reaches the trace in every sample in contact, so
 //    the run's summary labels chatter's onset on LinuxCNC as the simulated
 //    mill's does from its own. The onset and E's delay from it are printed,
-//    not compared: at LinuxCNC's 1503 rpm the paper's chatter (750 Hz)
-//    pulls onto the spindle's 30th order as it grows, the revolution-to-
-//    revolution change the label reads falls back after two revolutions,
-//    and in some runs the label finds no onset (deploy/linuxcnc/README.md);
+//    not compared: on LinuxCNC the paper's chatter (750 Hz) can draw onto
+//    the spindle's 30th order (751.5 Hz at LinuxCNC's 1503 rpm) as it
+//    grows; the revolution-to-revolution change that the label reads then
+//    falls back after two revolutions, and in some runs the label finds no
+//    onset (deploy/linuxcnc/README.md, "Chatter's onset on LinuxCNC");
 //  - overshoot: within 15 points of F_ref: the peak is reached while
 //    chatter grows, and LinuxCNC's hold decelerates (20 ms at 10 mm/s);
 //  - steady-state error of the passes that did not chatter: within 0.5
@@ -1141,11 +1142,15 @@ TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   // (A vibration that crosses 0 reads 0 to 1 nm now and then.)
   EXPECT_GT(seen.nonzero, 0.99 * seen.in_contact) << "the dynamometer's vibration is undriven";
   // E's delay from the onset, in revolutions at the paper's 1500 rpm.
-  const double rev_s = 60.0 / 1500;
-  std::printf("E's delay from the onset: LinuxCNC %.2f (%s), simulated %.2f revolutions\n",
-              (lc.chatter_detected_s() - lc.chatter_onset_s()) / rev_s,
-              lc.chatter_onset_s() > 0 ? "onset labelled" : "no onset labelled",
-              (sim.chatter_detected_s() - sim.chatter_onset_s()) / rev_s);
+  auto delay = [](const cfg::RunSummary& s) {
+    if (!(s.chatter_onset_s() > 0 && s.chatter_detected_s() > 0)) return std::string("- (none)");
+    char text[32];
+    std::snprintf(text, sizeof text, "%.2f",
+                  (s.chatter_detected_s() - s.chatter_onset_s()) * 1500 / 60);
+    return std::string(text);
+  };
+  std::printf("E's delay from the onset, revolutions: LinuxCNC %s, simulated %s\n",
+              delay(lc).c_str(), delay(sim).c_str());
   EXPECT_NEAR(lc.overshoot_pct(), sim.overshoot_pct(), 15.0);
   for (int i = 0; i < lc.passes_size() && i < sim.passes_size(); ++i) {
     if (lc.passes(i).chatter() || sim.passes(i).chatter()) continue;
