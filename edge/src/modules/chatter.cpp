@@ -318,8 +318,19 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       const bool net = q3_ > 0 && q2_ > floor && q1_ > floor && q > floor &&
                        q > p_.chatter_vibration_net_growth * q3_ && q > q2_ && q1_ >= keep * q2_ &&
                        q >= keep * q1_;
+      // A jump: past `jump`, by `jump_growth` over the revolution before,
+      // and held above it the next revolution within `jump_dip` of the
+      // jump. Chatter drawn onto a spindle order grows for a revolution or
+      // two and then repeats itself, so that q falls back while the
+      // vibration keeps its size (the paper's cut on the simulated mill at
+      // 1509 rpm: 0.124, 0.273, 0.269, then 0.117); a stable cut's q never
+      // jumps by a fifth to above it and holds (edge/README.md, "The
+      // rules' margins").
+      const double jump = p_.chatter_vibration_jump;
+      const bool jumped = q1_ > jump && q1_ > p_.chatter_vibration_jump_growth * q2_ && q > jump &&
+                          q >= (1 - p_.chatter_vibration_jump_dip) * q1_;
       q_above_ = q > p_.chatter_vibration_level ? q_above_ + 1 : 0;
-      if (rising || climbing || pausing || net || q_above_ >= kVibrationConfirm) {
+      if (rising || climbing || pausing || net || jumped || q_above_ >= kVibrationConfirm) {
         s.chatter_detected = true;
       }
       q3_ = q2_;

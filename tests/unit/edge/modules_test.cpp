@@ -1655,6 +1655,32 @@ TEST(AutomaticChatterDetector, AnUnevenGrowthIsChatterOnTheThirdRevolution) {
   EXPECT_EQ(run(no_net, &ignored), 5) << "the rise rule, a revolution later";
 }
 
+// A jump: q jumps past `jump` (by more than a fifth) and holds there the
+// next revolution without rising, as chatter drawn onto a spindle order does
+// before q falls back (the paper's cut at 1509 rpm: 0.124, 0.273, 0.269, then
+// 0.117). No other rule fires on it: the rise needs a second rise, the pause
+// and the net rule a revolution more. E fires on the revolution that holds.
+TEST(AutomaticChatterDetector, AJumpThatHoldsForARevolutionIsChatter) {
+  auto run = [](const EdgeParameters& p, std::vector<double>* q) {
+    return first_detection(p, {10, 40, 4, 5}, q);
+  };
+  const EdgeParameters p = with_y_modes(params());
+  std::vector<double> q;
+  const int at = run(p, &q);
+  ASSERT_EQ(at, 2);
+  EXPECT_LT(q[0], p.chatter_vibration_jump) << "below";
+  EXPECT_GT(q[1], p.chatter_vibration_jump) << "jumped past";
+  EXPECT_GT(q[1], p.chatter_vibration_jump_growth * q[0]) << "by more than jump_growth";
+  EXPECT_GT(q[2], p.chatter_vibration_jump) << "held above it";
+  EXPECT_LT(q[2], p.chatter_vibration_growth * q[1]) << "without rising: the rise rule cannot fire";
+  EXPECT_GE(q[2], (1 - p.chatter_vibration_jump_dip) * q[1]);
+  EdgeParameters no_jump = p;
+  no_jump.chatter_vibration_jump = HUGE_VAL;
+  std::vector<double> ignored;
+  const int later = run(no_jump, &ignored);
+  EXPECT_TRUE(later < 0 || later > 2) << later;
+}
+
 // The channel's white noise passes through the structure's modes into the
 // estimate and differs from one revolution to the next: in a cut that
 // repeats itself it reads as change. E takes its expected share out of

@@ -98,7 +98,8 @@ class OperatorChatterDetector final : public Module {
 // engagement's rise). d is then set by the rules of
 // Parameters::chatter_vibration_* (q rising past `rise`, or past `climb`
 // for longer, or past `pause` with a revolution's pause, or above `net`
-// three times while growing by half; q above `level`; or S above
+// three times while growing by half, or jumping past `jump` and held there
+// a revolution; q above `level`; or S above
 // `backup`), both energies less the channel's expected noise
 // (Parameters::vibration_sensor_noise_rms_n); without the channel,
 // by S above `chatter_threshold` in `chatter_confirm_revolutions`

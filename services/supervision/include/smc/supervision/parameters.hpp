@@ -127,7 +127,11 @@ struct Parameters {
   // more than `growth` x the revolution before); or exceeds `net` in three
   // in a row, the last more than `net_growth` x the one before them and
   // above the first of them, none below (1 - `net_dip`) x the one before
-  // it; or exceeds `level` in three in a row; or when
+  // it; or jumps past `jump` (to more than `jump_growth` x the revolution
+  // before) and stays above it the next revolution, at no less than
+  // (1 - `jump_dip`) x the jump (chatter drawn onto a spindle order grows
+  // for a revolution or two and then repeats itself, so that q falls back);
+  // or exceeds `level` in three in a row; or when
   // F_z's non-harmonic share exceeds `backup` in three (chatter locked to a
   // spindle harmonic repeats every revolution, and only F_z's spectrum shows
   // it once grown).
@@ -138,6 +142,9 @@ struct Parameters {
   double chatter_vibration_net = 0.135;
   double chatter_vibration_net_growth = 1.5;
   double chatter_vibration_net_dip = 0.15;
+  double chatter_vibration_jump = 0.25;
+  double chatter_vibration_jump_growth = 1.2;
+  double chatter_vibration_jump_dip = 0.3;
   double chatter_vibration_level = 0.8;
   double chatter_vibration_backup = 0.7;
 
