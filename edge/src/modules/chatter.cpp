@@ -329,8 +329,20 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       const double jump = p_.chatter_vibration_jump;
       const bool jumped = q1_ > jump && q1_ > p_.chatter_vibration_jump_growth * q2_ && q > jump &&
                           q >= (1 - p_.chatter_vibration_jump_dip) * q1_;
+      // A steep climb: three rises in a row, each by more than
+      // `steep_growth`, from at least `steep_from` to past `steep`. Chatter
+      // that starts from low grows fast (LinuxCNC's job-shop cut: 0.069,
+      // 0.119, 0.204, 0.237, then 0.140) and may fall back before the rise
+      // rule's second rise above `rise`; a stable cut's q climbs that
+      // steeply only to below it (edge/README.md, "The rules' margins").
+      // Below `steep_from` q is a repeating cut's own, whose rises mean
+      // nothing (rounding, where the cut repeats itself exactly).
+      const double sg = p_.chatter_vibration_steep_growth;
+      const bool steep = q3_ > p_.chatter_vibration_steep_from && q > p_.chatter_vibration_steep &&
+                         q > sg * q1_ && q1_ > sg * q2_ && q2_ > sg * q3_;
       q_above_ = q > p_.chatter_vibration_level ? q_above_ + 1 : 0;
-      if (rising || climbing || pausing || net || jumped || q_above_ >= kVibrationConfirm) {
+      if (rising || climbing || pausing || net || jumped || steep ||
+          q_above_ >= kVibrationConfirm) {
         s.chatter_detected = true;
       }
       q3_ = q2_;

@@ -7,7 +7,8 @@
 //       [--force-only] [--vibration-rise X] [--vibration-climb X] [--vibration-pause X]
 //       [--vibration-growth X] [--vibration-net X] [--vibration-net-growth X]
 //       [--vibration-net-dip X] [--vibration-jump X] [--vibration-jump-growth X]
-//       [--vibration-jump-dip X] [--vibration-level X] [--vibration-backup X]
+//       [--vibration-jump-dip X] [--vibration-steep X] [--vibration-steep-growth X]
+//       [--vibration-steep-from X] [--vibration-level X] [--vibration-backup X]
 //       [--vibration-noise N] [--channel-noise N] [--mill-model FILE] [--no-regeneration]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
@@ -119,8 +120,8 @@ int main(int argc, char** argv) {
   bool force_only = false;
   bool no_regeneration = false;
   double noise = -1, channel_noise = -1, rise = -1, climb = -1, pause = -1, growth = -1, net = -1,
-         net_growth = -1, net_dip = -1, jump = -1, jump_growth = -1, jump_dip = -1, level = -1,
-         backup = -1;  // < 0: the shipped values
+         net_growth = -1, net_dip = -1, jump = -1, jump_growth = -1, jump_dip = -1, steep = -1,
+         steep_growth = -1, steep_from = -1, level = -1, backup = -1;  // < 0: the shipped values
   std::FILE* dump = nullptr;
   std::FILE* raw_runs = nullptr;
   std::FILE* raw_samples = nullptr;
@@ -155,6 +156,12 @@ int main(int argc, char** argv) {
       jump_growth = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-jump-dip") == 0 && more) {
       jump_dip = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-steep") == 0 && more) {
+      steep = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-steep-growth") == 0 && more) {
+      steep_growth = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--vibration-steep-from") == 0 && more) {
+      steep_from = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-level") == 0 && more) {
       level = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--vibration-noise") == 0 && more) {
@@ -194,6 +201,7 @@ int main(int argc, char** argv) {
                    "[--vibration-climb X] [--vibration-pause X] [--vibration-growth X] "
                    "[--vibration-net X] [--vibration-net-growth X] [--vibration-net-dip X] "
                    "[--vibration-jump X] [--vibration-jump-growth X] [--vibration-jump-dip X] "
+                   "[--vibration-steep X] [--vibration-steep-growth X] [--vibration-steep-from X] "
                    "[--vibration-level X] [--vibration-backup X] [--vibration-noise N] "
                    "[--channel-noise N] [--mill-model FILE] [--no-regeneration]\n",
                    argv[0]);
@@ -237,6 +245,9 @@ int main(int argc, char** argv) {
     if (jump >= 0) ep.chatter_vibration_jump = jump;
     if (jump_growth >= 0) ep.chatter_vibration_jump_growth = jump_growth;
     if (jump_dip >= 0) ep.chatter_vibration_jump_dip = jump_dip;
+    if (steep >= 0) ep.chatter_vibration_steep = steep;
+    if (steep_growth >= 0) ep.chatter_vibration_steep_growth = steep_growth;
+    if (steep_from >= 0) ep.chatter_vibration_steep_from = steep_from;
     if (level >= 0) ep.chatter_vibration_level = level;
     if (backup >= 0) ep.chatter_vibration_backup = backup;
     if (noise >= 0) ep.vibration_sensor_noise_rms_n = noise;
@@ -245,8 +256,8 @@ int main(int argc, char** argv) {
   const bool e_muted = threshold_override >= 1;
   auto mute = [](EdgeParameters& ep) {
     ep.chatter_vibration_rise = ep.chatter_vibration_climb = ep.chatter_vibration_pause =
-        ep.chatter_vibration_net = ep.chatter_vibration_jump = ep.chatter_vibration_level =
-            HUGE_VAL;
+        ep.chatter_vibration_net = ep.chatter_vibration_jump = ep.chatter_vibration_steep =
+            ep.chatter_vibration_level = HUGE_VAL;
     ep.chatter_vibration_backup = ep.chatter_threshold = 2;  // S is a share: at most 1
   };
   // One cut on the simulated mill, E listening or not.
@@ -277,7 +288,8 @@ int main(int argc, char** argv) {
         "it, then passes where it rose to (each rise by more than x%.2f), or exceeds %.3f in "
         "3 with the last x%.2f the one before them and none falling by more than %.0f%%, or "
         "jumps past %.2f by more than x%.2f and stays above it, falling by no more than "
-        "%.0f%%, or exceeds %.2f in 3; or when S, the non-harmonic share of F_z energy, exceeds "
+        "%.0f%%, or rises three times in a row by more than x%.2f each from %.2f to past "
+        "%.2f, or exceeds %.2f in 3; or when S, the non-harmonic share of F_z energy, exceeds "
         "%.2f in 3",
         shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
         shown.vibration_sensor_noise_rms_n, shown.chatter_vibration_rise,
@@ -285,8 +297,9 @@ int main(int argc, char** argv) {
         shown.chatter_vibration_growth, shown.chatter_vibration_net,
         shown.chatter_vibration_net_growth, 100 * shown.chatter_vibration_net_dip,
         shown.chatter_vibration_jump, shown.chatter_vibration_jump_growth,
-        100 * shown.chatter_vibration_jump_dip, shown.chatter_vibration_level,
-        shown.chatter_vibration_backup);
+        100 * shown.chatter_vibration_jump_dip, shown.chatter_vibration_steep_growth,
+        shown.chatter_vibration_steep_from, shown.chatter_vibration_steep,
+        shown.chatter_vibration_level, shown.chatter_vibration_backup);
   } else {
     std::printf(
         "module E: threshold %.2f on S, the non-harmonic share of F_z energy, %d revolutions "

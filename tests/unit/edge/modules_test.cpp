@@ -1681,6 +1681,32 @@ TEST(AutomaticChatterDetector, AJumpThatHoldsForARevolutionIsChatter) {
   EXPECT_TRUE(later < 0 || later > 2) << later;
 }
 
+// A steep climb: q rises three times in a row, each by more than
+// `steep_growth`, from low to past `steep`, as chatter starting from low on
+// LinuxCNC did (0.069, 0.119, 0.204, 0.237, then back to 0.140). The rise
+// rule needs a second rise above `rise`, the climb rule a third rise from
+// above `climb`: neither fires there. E fires on the third rise.
+TEST(AutomaticChatterDetector, ASteepClimbFromLowIsChatter) {
+  auto run = [](const EdgeParameters& p, std::vector<double>* q) {
+    return first_detection(p, {12, 11, 19, 25, 4, 4}, q);
+  };
+  const EdgeParameters p = with_y_modes(params());
+  std::vector<double> q;
+  const int at = run(p, &q);
+  ASSERT_EQ(at, 3);
+  const double g = p.chatter_vibration_steep_growth;
+  EXPECT_GT(q[1], g * q[0]) << "the first rise";
+  EXPECT_GT(q[2], g * q[1]) << "the second";
+  EXPECT_GT(q[3], g * q[2]) << "the third";
+  EXPECT_GT(q[3], p.chatter_vibration_steep) << "to past steep";
+  EXPECT_LT(q[1], p.chatter_vibration_climb) << "from below the climb rule's level";
+  EXPECT_LT(q[2], p.chatter_vibration_rise) << "the rise rule's first rise is not above rise";
+  EdgeParameters no_steep = p;
+  no_steep.chatter_vibration_steep = HUGE_VAL;
+  std::vector<double> ignored;
+  EXPECT_EQ(run(no_steep, &ignored), -1) << "q falls back after it: no other rule fires";
+}
+
 // The channel's white noise passes through the structure's modes into the
 // estimate and differs from one revolution to the next: in a cut that
 // repeats itself it reads as change. E takes its expected share out of

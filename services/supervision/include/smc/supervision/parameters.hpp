@@ -131,7 +131,10 @@ struct Parameters {
   // before) and stays above it the next revolution, at no less than
   // (1 - `jump_dip`) x the jump (chatter drawn onto a spindle order grows
   // for a revolution or two and then repeats itself, so that q falls back);
-  // or exceeds `level` in three in a row; or when
+  // or rises three times in a row, each by more than `steep_growth`, from at
+  // least `steep_from` to past `steep` (chatter from low grows fast and may
+  // fall back before a second rise above `rise`); or exceeds `level` in three
+  // in a row; or when
   // F_z's non-harmonic share exceeds `backup` in three (chatter locked to a
   // spindle harmonic repeats every revolution, and only F_z's spectrum shows
   // it once grown).
@@ -145,6 +148,9 @@ struct Parameters {
   double chatter_vibration_jump = 0.25;
   double chatter_vibration_jump_growth = 1.2;
   double chatter_vibration_jump_dip = 0.3;
+  double chatter_vibration_steep = 0.23;
+  double chatter_vibration_steep_growth = 1.15;
+  double chatter_vibration_steep_from = 0.02;
   double chatter_vibration_level = 0.8;
   double chatter_vibration_backup = 0.7;
 
