@@ -61,13 +61,14 @@ void write_outputs(const std::string& dir, const EdgeCore& core, const RunResult
     CsvFile f(out / "samples.csv");
     std::fprintf(f.get(),
                  "t_s,x_mm,pass_index,in_pass,depth_mm,f_y_n,f_z_n,f_y_wide_n,f_y_peak_n,f_ref_n,"
-                 "feedrate_mm_s,power_w,vibration_y_mm,contact,modules,steps\n");
+                 "feedrate_mm_s,spindle_rpm,power_w,vibration_y_mm,contact,modules,steps\n");
     for (const auto& s : run.samples) {
-      std::fprintf(
-          f.get(), "%.4f,%.3f,%d,%d,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.3f,%.1f,%.6f,%d,%s,%s\n", s.t_s,
-          s.x_mm, s.pass_index, s.in_pass ? 1 : 0, s.depth_mm, s.f_y_n, s.f_z_n, s.f_y_wide_n,
-          s.f_y_peak_n, s.f_ref_n, s.feedrate_mm_s, s.power_w, s.vibration_y_mm, s.contact ? 1 : 0,
-          modules_string(s.active).c_str(), steps_string(core, s.steps).c_str());
+      std::fprintf(f.get(),
+                   "%.4f,%.3f,%d,%d,%.3f,%.2f,%.2f,%.2f,%.2f,%.2f,%.3f,%.1f,%.1f,%.6f,%d,%s,%s\n",
+                   s.t_s, s.x_mm, s.pass_index, s.in_pass ? 1 : 0, s.depth_mm, s.f_y_n, s.f_z_n,
+                   s.f_y_wide_n, s.f_y_peak_n, s.f_ref_n, s.feedrate_mm_s, s.spindle_rpm, s.power_w,
+                   s.vibration_y_mm, s.contact ? 1 : 0, modules_string(s.active).c_str(),
+                   steps_string(core, s.steps).c_str());
     }
   }
   {

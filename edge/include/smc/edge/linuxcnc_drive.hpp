@@ -16,8 +16,10 @@
 //              from holding the feed.
 //   rewrite()  real-time: holds the feed and asks the control thread to
 //              hand LinuxCNC the remainder at a safe point: motion stopped,
-//              program aborted, the remainder's G-code opened and run (it
-//              retracts to the safe Z before it moves in X).
+//              program aborted (which stops LinuxCNC's spindle), the
+//              spindle started again at the remainder's speed and the tool
+//              lifted to the safe Z in one MDI line (the feed released for
+//              that move only), then the remainder's G-code opened and run.
 //   retract()  real-time: after a broken tool (module N), holds the feed and
 //              asks the control thread to lift the tool clear: motion
 //              stopped, program aborted, then a rapid to the programs' safe

@@ -88,7 +88,7 @@ struct LinuxCncDrive::Impl {
   // N's breakage: lift the tool clear (retract()).
   std::atomic<bool> retract_asked{false};
   // Control thread → loop.
-  std::atomic<bool> retract_moving{false};  // the lift runs: the feed is released for it
+  std::atomic<bool> retract_moving{false};  // a lift runs: the feed is released for it
   std::atomic<int> rewrite_done{0};
   std::atomic<bool> done{false};
   std::atomic<int> fault{static_cast<int>(CncFault::kNone)};
@@ -159,6 +159,11 @@ struct LinuxCncDrive::Impl {
   // The control thread's part of retract(): standstill, abort, a rapid to
   // the safe Z in MDI, and wait until the move stopped there.
   void lift();
+  // Runs one MDI line that moves the tool (LinuxCNC's program aborted
+  // before), with the feed released for it, and returns once the
+  // interpreter is idle and the axes stand still; throws on LinuxCNC's
+  // error or after 10 s (60 mm at the slowest rapid configured).
+  void mdi_move(const std::string& line);
 };
 
 LinuxCncDrive::LinuxCncDrive(const smc::config::SupervisorConfig& config, double sample_period_s,
@@ -311,14 +316,32 @@ void LinuxCncDrive::Impl::control_loop() {
       // A safe point: the feed is held by the loop; wait for standstill.
       if (std::fabs(st.velocity_mm_s) > 1e-3) continue;
       try {
+        // The tool stands in the cut. LinuxCNC's abort also stops the
+        // spindle; the remainder's first move lifts the tool only once it
+        // runs, and opening it can take most of a second, during which the
+        // spindle ran down in the cut (a LinuxCNC run: the chatter regrew
+        // to the force sensor's limit). So the spindle is started again at
+        // the remainder's speed and the tool lifted to the safe Z in one
+        // MDI line (M3 runs before the move) before the remainder is
+        // handed over. The override goes back to 1 first: the remainder's
+        // G-code carries the speed O chose.
         cnc->abort();
+        cnc->set_spindle_override(1.0);
+        speed_handled = speed_asked.load(std::memory_order_acquire);
+        const int first = std::clamp(rewrite_from, 0, std::max(0, rewrite_program.count - 1));
+        const double rpm = rewrite_program.passes[static_cast<std::size_t>(first)].spindle_rpm;
+        const double safe_z = supervision::GcodeOptions{}.safe_z_mm;
+        char clear[128];
+        if (rpm > 0 && std::isfinite(rpm)) {
+          std::snprintf(clear, sizeof clear, "G21 G90 G54 M3 S%.0f G0 Z%.3f", rpm, safe_z);
+        } else {
+          std::snprintf(clear, sizeof clear, "G21 G90 G54 G0 Z%.3f", safe_z);
+        }
+        mdi_move(clear);
         LineMap& m = maps[static_cast<std::size_t>(1 - map_index.load())];
         const std::string path = write_program(rewrite_program, rewrite_from, m);
         cnc->open_program(path);
         map_index.store(1 - map_index.load(), std::memory_order_release);
-        // The remainder's G-code carries the speed O chose: no override on it.
-        cnc->set_spindle_override(1.0);
-        speed_handled = speed_asked.load(std::memory_order_acquire);
         cnc->run();
         spdlog::info("{}: LinuxCNC runs the rewritten program {} from pass {}", opt.machine_id,
                      path, rewrite_from + 1);
@@ -341,17 +364,11 @@ void LinuxCncDrive::Impl::control_loop() {
   }
 }
 
-void LinuxCncDrive::Impl::lift() {
+void LinuxCncDrive::Impl::mdi_move(const std::string& line) {
   using namespace std::chrono_literals;
-  const double safe_z = supervision::GcodeOptions{}.safe_z_mm;  // the programs' own
+  retract_moving.store(true, std::memory_order_release);
   try {
-    cnc->abort();
-    retract_moving.store(true, std::memory_order_release);
-    char line[96];
-    std::snprintf(line, sizeof line, "G21 G90 G54 G0 Z%.3f", safe_z);
     cnc->mdi(line);
-    // The move runs; it is done when the interpreter is idle and the axes
-    // stand still (at most 10 s: 60 mm at the slowest rapid configured).
     const auto until = std::chrono::steady_clock::now() + 10s;
     int still = 0;
     while (std::chrono::steady_clock::now() < until) {
@@ -362,14 +379,26 @@ void LinuxCncDrive::Impl::lift() {
       }
       still = now.interp_idle && std::fabs(now.velocity_mm_s) < 1e-3 ? still + 1 : 0;
       if (still >= 3) {
-        spdlog::warn("{}: tool broken: LinuxCNC lifted it to Z{:.1f}", opt.machine_id, safe_z);
         retract_moving.store(false, std::memory_order_release);
         return;
       }
     }
-    throw std::runtime_error("the lift did not end within 10 s");
-  } catch (const std::exception& e) {
+    throw std::runtime_error("'" + line + "' did not end within 10 s");
+  } catch (...) {
     retract_moving.store(false, std::memory_order_release);
+    throw;
+  }
+}
+
+void LinuxCncDrive::Impl::lift() {
+  const double safe_z = supervision::GcodeOptions{}.safe_z_mm;  // the programs' own
+  try {
+    cnc->abort();
+    char line[96];
+    std::snprintf(line, sizeof line, "G21 G90 G54 G0 Z%.3f", safe_z);
+    mdi_move(line);
+    spdlog::warn("{}: tool broken: LinuxCNC lifted it to Z{:.1f}", opt.machine_id, safe_z);
+  } catch (const std::exception& e) {
     set_fault(CncFault::kProgram,
               std::string("lifting the broken tool: ") + e.what() + "; clear the tool by hand");
   }
