@@ -119,9 +119,31 @@ int main(int argc, char** argv) {
   int confirm_override = 0;
   bool force_only = false;
   bool no_regeneration = false;
-  double noise = -1, channel_noise = -1, rise = -1, climb = -1, pause = -1, growth = -1, net = -1,
-         net_growth = -1, net_dip = -1, jump = -1, jump_growth = -1, jump_dip = -1, steep = -1,
-         steep_growth = -1, steep_from = -1, level = -1, backup = -1;  // < 0: the shipped values
+  double channel_noise = -1;  // < 0: the configuration's
+  // E's parameters the study may override (< 0: the shipped value).
+  struct Knob {
+    const char* flag;
+    double EdgeParameters::*field;
+    double value = -1;
+  };
+  Knob knobs[] = {
+      {"--vibration-rise", &EdgeParameters::chatter_vibration_rise},
+      {"--vibration-climb", &EdgeParameters::chatter_vibration_climb},
+      {"--vibration-pause", &EdgeParameters::chatter_vibration_pause},
+      {"--vibration-growth", &EdgeParameters::chatter_vibration_growth},
+      {"--vibration-net", &EdgeParameters::chatter_vibration_net},
+      {"--vibration-net-growth", &EdgeParameters::chatter_vibration_net_growth},
+      {"--vibration-net-dip", &EdgeParameters::chatter_vibration_net_dip},
+      {"--vibration-jump", &EdgeParameters::chatter_vibration_jump},
+      {"--vibration-jump-growth", &EdgeParameters::chatter_vibration_jump_growth},
+      {"--vibration-jump-dip", &EdgeParameters::chatter_vibration_jump_dip},
+      {"--vibration-steep", &EdgeParameters::chatter_vibration_steep},
+      {"--vibration-steep-growth", &EdgeParameters::chatter_vibration_steep_growth},
+      {"--vibration-steep-from", &EdgeParameters::chatter_vibration_steep_from},
+      {"--vibration-level", &EdgeParameters::chatter_vibration_level},
+      {"--vibration-backup", &EdgeParameters::chatter_vibration_backup},
+      {"--vibration-noise", &EdgeParameters::vibration_sensor_noise_rms_n},
+  };
   std::FILE* dump = nullptr;
   std::FILE* raw_runs = nullptr;
   std::FILE* raw_samples = nullptr;
@@ -130,46 +152,22 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (grid.take(argc, argv, i)) continue;
     const bool more = i + 1 < argc;
+    Knob* knob = nullptr;
+    for (Knob& k : knobs) {
+      if (std::strcmp(argv[i], k.flag) == 0) knob = &k;
+    }
+    if (knob != nullptr && more) {
+      knob->value = std::atof(argv[++i]);
+      continue;
+    }
     if (std::strcmp(argv[i], "--threshold") == 0 && more) {
       threshold_override = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--force-only") == 0) {
       force_only = true;
     } else if (std::strcmp(argv[i], "--no-regeneration") == 0) {
       no_regeneration = true;
-    } else if (std::strcmp(argv[i], "--vibration-rise") == 0 && more) {
-      rise = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-climb") == 0 && more) {
-      climb = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-pause") == 0 && more) {
-      pause = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-growth") == 0 && more) {
-      growth = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-net") == 0 && more) {
-      net = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-net-growth") == 0 && more) {
-      net_growth = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-net-dip") == 0 && more) {
-      net_dip = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-jump") == 0 && more) {
-      jump = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-jump-growth") == 0 && more) {
-      jump_growth = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-jump-dip") == 0 && more) {
-      jump_dip = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-steep") == 0 && more) {
-      steep = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-steep-growth") == 0 && more) {
-      steep_growth = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-steep-from") == 0 && more) {
-      steep_from = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-level") == 0 && more) {
-      level = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-noise") == 0 && more) {
-      noise = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--channel-noise") == 0 && more) {
       channel_noise = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--vibration-backup") == 0 && more) {
-      backup = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
       confirm_override = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--dump-samples") == 0 && more) {
@@ -235,22 +233,9 @@ int main(int argc, char** argv) {
   // carry the vibration rules).
   auto tune = [&](EdgeParameters& ep) {
     if (force_only) ep.vibration_mode_count = 0;
-    if (rise >= 0) ep.chatter_vibration_rise = rise;
-    if (climb >= 0) ep.chatter_vibration_climb = climb;
-    if (pause >= 0) ep.chatter_vibration_pause = pause;
-    if (growth >= 0) ep.chatter_vibration_growth = growth;
-    if (net >= 0) ep.chatter_vibration_net = net;
-    if (net_growth >= 0) ep.chatter_vibration_net_growth = net_growth;
-    if (net_dip >= 0) ep.chatter_vibration_net_dip = net_dip;
-    if (jump >= 0) ep.chatter_vibration_jump = jump;
-    if (jump_growth >= 0) ep.chatter_vibration_jump_growth = jump_growth;
-    if (jump_dip >= 0) ep.chatter_vibration_jump_dip = jump_dip;
-    if (steep >= 0) ep.chatter_vibration_steep = steep;
-    if (steep_growth >= 0) ep.chatter_vibration_steep_growth = steep_growth;
-    if (steep_from >= 0) ep.chatter_vibration_steep_from = steep_from;
-    if (level >= 0) ep.chatter_vibration_level = level;
-    if (backup >= 0) ep.chatter_vibration_backup = backup;
-    if (noise >= 0) ep.vibration_sensor_noise_rms_n = noise;
+    for (const Knob& k : knobs) {
+      if (k.value >= 0) ep.*k.field = k.value;
+    }
   };
   // E's rules off: the run that labels a cut.
   const bool e_muted = threshold_override >= 1;
