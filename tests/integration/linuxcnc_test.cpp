@@ -1125,7 +1125,7 @@ TEST_F(LinuxCncCell, AJobForAMillInEStopFailsWithTheReason) {
 //    remainder lifted the tool (in one run the chatter then regrew to the
 //    force sensor's limit); the drive restarts it and lifts the tool in
 //    one MDI line first, so the spindle stays above 40 % of its speed
-//    until the cutter moves away (about 1300 rpm at the lowest in three
+//    until the cutter moves away (1003-1418 rpm at the lowest in nine
 //    runs, 0 before).
 TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   int st = -1;
