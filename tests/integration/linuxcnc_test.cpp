@@ -1100,11 +1100,18 @@ TEST_F(LinuxCncCell, AJobForAMillInEStopFailsWithTheReason) {
 // the simulated mill (smc-edge simulate with and without --drive linuxcnc).
 // Tolerances, and why:
 //  - passes, rewrites: equal;
-//  - chatter detected after the first contact: within 0.2 s (5 revolutions
-//    at 1500 rpm): the same physics grows the same chatter, and E decides
-//    once per revolution; LinuxCNC's feed reaches the part along its own
-//    acceleration ramp, which moves the contact by a fraction of a
-//    revolution;
+//  - chatter detected after the first contact: within 0.3 s (7.5
+//    revolutions at 1500 rpm) of the simulated mill's 2.56 s: the same
+//    physics grows the same chatter, and E decides once per revolution,
+//    but on LinuxCNC the feed reaches the part along its own acceleration
+//    ramp and the edge's feed commands reach the motion with the host's
+//    latency, so the chatter's onset after contact spreads over 2.48-2.71
+//    s in 28 runs on an idle host (the simulated mill's 2.52 s), and E's
+//    delay from it over 0.8-4.75 revolutions (the simulated mill's 0.99).
+//    Detection after contact: 2.595-2.714 s on an idle host, 2.794 s in a
+//    run under the whole suite's load. (The bound was 0.2 s while the
+//    simulated mill detected at 2.60 s; E's steep rule caught it a
+//    revolution earlier there and the suite's run went 0.234 s over.)
 //  - the chatter label: the virtual dynamometer's vibration
 //    (smc-vibration-y) reaches the trace in every sample in contact, so
 //    the run's summary labels chatter's onset on LinuxCNC as the simulated
@@ -1125,7 +1132,7 @@ TEST_F(LinuxCncCell, AJobForAMillInEStopFailsWithTheReason) {
 //    remainder lifted the tool (in one run the chatter then regrew to the
 //    force sensor's limit); the drive restarts it and lifts the tool in
 //    one MDI line first, so the spindle stays above 40 % of its speed
-//    until the cutter moves away (1003-1418 rpm at the lowest in nine
+//    until the cutter moves away (951-1418 rpm at the lowest in twelve
 //    runs, 0 before).
 TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   int st = -1;
@@ -1158,7 +1165,7 @@ TEST_F(LinuxCncDyno, TheJobShopRunAgreesWithTheSimulatedMill) {
   EXPECT_EQ(lc.passes_completed(), sim.passes_completed());
   EXPECT_EQ(lc.program_rewrites(), sim.program_rewrites());
   EXPECT_GT(sim_detect, 0);
-  EXPECT_NEAR(lc_detect, sim_detect, 0.2);
+  EXPECT_NEAR(lc_detect, sim_detect, 0.3);
   const auto seen = vibration_seen((dir_ / "lcnc" / "samples.csv").string());
   EXPECT_GT(seen.in_contact, 10000) << "LinuxCNC's run cut for 5 s and more";
   EXPECT_EQ(seen.known, seen.in_contact) << "samples in contact without the vibration";
