@@ -66,7 +66,7 @@ void AutomaticChatterDetector::reset() noexcept {
   for (auto& m : modes_) m.q = m.w = 0;
   vibration_at_ = vibration_run_ = 0;
   wide_channel_ = false;
-  q1_ = q2_ = q3_ = std::numeric_limits<double>::quiet_NaN();
+  q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
   q_above_ = 0;
 }
 
@@ -244,7 +244,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   if (samples != s.revolution_samples) {
     vibration_run_ = 0;
     wide_channel_ = false;
-    q1_ = q2_ = q3_ = std::numeric_limits<double>::quiet_NaN();
+    q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
     q_above_ = 0;
     return Status::kOk;
   }
@@ -338,18 +338,31 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       // Below `steep_from` q is a repeating cut's own, whose rises mean
       // nothing (rounding, where the cut repeats itself exactly).
       const double sg = p_.chatter_vibration_steep_growth;
-      const bool steep = q3_ > p_.chatter_vibration_steep_from && q > p_.chatter_vibration_steep &&
-                         q > sg * q1_ && q1_ > sg * q2_ && q2_ > sg * q3_;
+      const bool climbed =
+          q3_ > p_.chatter_vibration_steep_from && q > sg * q1_ && q1_ > sg * q2_ && q2_ > sg * q3_;
+      const bool steep = climbed && q > p_.chatter_vibration_steep;
+      // The same climb to past `confirmed` only, where F_z's non-harmonic
+      // share S (judged on its own channel) rose by more than
+      // `confirmed_growth` in each of the last two revolutions: the two
+      // channels' evidence together. A stable cut's q climbs steeply while
+      // S rises so only to far below it (edge/README.md, "The rules'
+      // margins"); chatter on LinuxCNC is caught a revolution earlier.
+      const double sq = steady && !leaving ? ratio : std::numeric_limits<double>::quiet_NaN();
+      const double cg = p_.chatter_vibration_confirmed_growth;
+      const bool confirmed = climbed && q > p_.chatter_vibration_confirmed && s2_ > 0 &&
+                             s1_ > cg * s2_ && sq > cg * s1_;
       q_above_ = q > p_.chatter_vibration_level ? q_above_ + 1 : 0;
-      if (rising || climbing || pausing || net || jumped || steep ||
+      if (rising || climbing || pausing || net || jumped || steep || confirmed ||
           q_above_ >= kVibrationConfirm) {
         s.chatter_detected = true;
       }
       q3_ = q2_;
       q2_ = q1_;
       q1_ = q;
+      s2_ = s1_;
+      s1_ = sq;
     } else {
-      q1_ = q2_ = q3_ = std::numeric_limits<double>::quiet_NaN();
+      q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
       q_above_ = 0;
     }
   }

@@ -8,7 +8,8 @@
 //       [--vibration-growth X] [--vibration-net X] [--vibration-net-growth X]
 //       [--vibration-net-dip X] [--vibration-jump X] [--vibration-jump-growth X]
 //       [--vibration-jump-dip X] [--vibration-steep X] [--vibration-steep-growth X]
-//       [--vibration-steep-from X] [--vibration-level X] [--vibration-backup X]
+//       [--vibration-steep-from X] [--vibration-confirmed X]
+//       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-backup X]
 //       [--vibration-noise N] [--channel-noise N] [--mill-model FILE] [--no-regeneration]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
@@ -140,6 +141,8 @@ int main(int argc, char** argv) {
       {"--vibration-steep", &EdgeParameters::chatter_vibration_steep},
       {"--vibration-steep-growth", &EdgeParameters::chatter_vibration_steep_growth},
       {"--vibration-steep-from", &EdgeParameters::chatter_vibration_steep_from},
+      {"--vibration-confirmed", &EdgeParameters::chatter_vibration_confirmed},
+      {"--vibration-confirmed-growth", &EdgeParameters::chatter_vibration_confirmed_growth},
       {"--vibration-level", &EdgeParameters::chatter_vibration_level},
       {"--vibration-backup", &EdgeParameters::chatter_vibration_backup},
       {"--vibration-noise", &EdgeParameters::vibration_sensor_noise_rms_n},
@@ -200,7 +203,8 @@ int main(int argc, char** argv) {
                    "[--vibration-net X] [--vibration-net-growth X] [--vibration-net-dip X] "
                    "[--vibration-jump X] [--vibration-jump-growth X] [--vibration-jump-dip X] "
                    "[--vibration-steep X] [--vibration-steep-growth X] [--vibration-steep-from X] "
-                   "[--vibration-level X] [--vibration-backup X] [--vibration-noise N] "
+                   "[--vibration-confirmed X] [--vibration-confirmed-growth X] [--vibration-level "
+                   "X] [--vibration-backup X] [--vibration-noise N] "
                    "[--channel-noise N] [--mill-model FILE] [--no-regeneration]\n",
                    argv[0]);
       return 2;
@@ -242,7 +246,7 @@ int main(int argc, char** argv) {
   auto mute = [](EdgeParameters& ep) {
     ep.chatter_vibration_rise = ep.chatter_vibration_climb = ep.chatter_vibration_pause =
         ep.chatter_vibration_net = ep.chatter_vibration_jump = ep.chatter_vibration_steep =
-            ep.chatter_vibration_level = HUGE_VAL;
+            ep.chatter_vibration_confirmed = ep.chatter_vibration_level = HUGE_VAL;
     ep.chatter_vibration_backup = ep.chatter_threshold = 2;  // S is a share: at most 1
   };
   // One cut on the simulated mill, E listening or not.
@@ -274,7 +278,8 @@ int main(int argc, char** argv) {
         "3 with the last x%.2f the one before them and none falling by more than %.0f%%, or "
         "jumps past %.2f by more than x%.2f and stays above it, falling by no more than "
         "%.0f%%, or rises three times in a row by more than x%.2f each from %.2f to past "
-        "%.2f, or exceeds %.2f in 3; or when S, the non-harmonic share of F_z energy, exceeds "
+        "%.2f (to past %.2f where S, below, rose by more than x%.2f in each of the last two), "
+        "or exceeds %.2f in 3; or when S, the non-harmonic share of F_z energy, exceeds "
         "%.2f in 3",
         shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
         shown.vibration_sensor_noise_rms_n, shown.chatter_vibration_rise,
@@ -284,6 +289,7 @@ int main(int argc, char** argv) {
         shown.chatter_vibration_jump, shown.chatter_vibration_jump_growth,
         100 * shown.chatter_vibration_jump_dip, shown.chatter_vibration_steep_growth,
         shown.chatter_vibration_steep_from, shown.chatter_vibration_steep,
+        shown.chatter_vibration_confirmed, shown.chatter_vibration_confirmed_growth,
         shown.chatter_vibration_level, shown.chatter_vibration_backup);
   } else {
     std::printf(

@@ -480,9 +480,10 @@ namespace {
 // harmonics), all repeating every revolution; F_y also `chatter` N at 640 Hz
 // (near the tool's y mode), not a spindle order. `k0` counts samples across
 // revolutions, so that the chatter runs on from one to the next. `wide`
-// false: a sensor without the wideband channel (NaN).
+// false: a sensor without the wideband channel (NaN). `chatter_z`: the same
+// tone's amplitude in F_z, which S sees.
 Signals wide_revolution(AutomaticChatterDetector& e, const EdgeParameters& p, int& k0,
-                        double runout, double chatter, bool wide = true) {
+                        double runout, double chatter, bool wide = true, double chatter_z = 0) {
   Signals s;
   s.spindle_rpm = 1500;
   s.engagement = 1;
@@ -493,7 +494,7 @@ Signals wide_revolution(AutomaticChatterDetector& e, const EdgeParameters& p, in
       return std::sin(2 * std::numbers::pi * hz * t + phase);
     };
     const double orders = runout * (wave(175, 0.3) + wave(225, 1.1));
-    s.sample.f_z_n = 300 + 80 * wave(100, 0) + orders;
+    s.sample.f_z_n = 300 + 80 * wave(100, 0) + orders + chatter_z * wave(640, 0.2);
     s.sample.f_y_wide_n =
         wide ? 400 + 150 * wave(100, 0.5) + orders + chatter * wave(640, 0.2) : std::nan("");
     e.on_sample(s);
@@ -518,16 +519,22 @@ EdgeParameters with_y_modes(EdgeParameters p) {
 // is about twice its size, and q follows the amplitude and the one
 // before): the revolution E first detects chatter on (-1: none), and q of
 // each revolution up to it.
+// `chatter_z`, when given, the tone's amplitude in F_z each revolution (S
+// of each revolution in `share`).
 int first_detection(const EdgeParameters& p, std::initializer_list<double> chatter,
-                    std::vector<double>* q) {
+                    std::vector<double>* q, std::initializer_list<double> chatter_z = {},
+                    std::vector<double>* share = nullptr) {
   AutomaticChatterDetector e;
   e.configure(p);
   int k0 = 0;
   for (int r = 0; r < 6; ++r) wide_revolution(e, p, k0, 0, 0);
   int r = 0;
+  const double* z = chatter_z.begin();
   for (const double amplitude : chatter) {
-    const Signals s = wide_revolution(e, p, k0, 0, amplitude);
+    const double in_z = z != chatter_z.end() ? *z++ : 0;
+    const Signals s = wide_revolution(e, p, k0, 0, amplitude, true, in_z);
     q->push_back(s.chatter_vibration_ratio);
+    if (share != nullptr) share->push_back(s.chatter_ratio);
     if (s.chatter_detected) return r;
     ++r;
   }
@@ -1705,6 +1712,44 @@ TEST(AutomaticChatterDetector, ASteepClimbFromLowIsChatter) {
   no_steep.chatter_vibration_steep = HUGE_VAL;
   std::vector<double> ignored;
   EXPECT_EQ(run(no_steep, &ignored), -1) << "q falls back after it: no other rule fires";
+}
+
+// The steep climb confirmed by S: q rises three times in a row as the steep
+// rule asks but only to between `confirmed` and `steep`, while chatter's
+// share of F_z energy (S, its own channel) rises by more than
+// `confirmed_growth` in each of the last two revolutions, as on LinuxCNC
+// (q 0.067, 0.133, 0.211, then 0.211 and 0.117; S 0.18, 0.41, 0.69). E fires
+// on the third rise; without S rising, or without the rule, it does not.
+TEST(AutomaticChatterDetector, ASteepClimbThatSConfirmsIsChatter) {
+  const std::initializer_list<double> y = {12, 11, 17, 19, 4, 4};
+  auto run = [&](const EdgeParameters& p, std::initializer_list<double> z, std::vector<double>* q,
+                 std::vector<double>* share) { return first_detection(p, y, q, z, share); };
+  const EdgeParameters p = with_y_modes(params());
+  std::vector<double> q, share;
+  ASSERT_EQ(run(p, {15, 30, 60, 120, 0, 0}, &q, &share), 3);
+  const double g = p.chatter_vibration_steep_growth;
+  EXPECT_GT(q[0], p.chatter_vibration_steep_from) << "from above steep_from";
+  EXPECT_GT(q[1], g * q[0]) << "the first rise";
+  EXPECT_GT(q[2], g * q[1]) << "the second";
+  EXPECT_GT(q[3], g * q[2]) << "the third";
+  EXPECT_GT(q[3], p.chatter_vibration_confirmed) << "to past confirmed";
+  EXPECT_LT(q[3], p.chatter_vibration_steep) << "not past steep: the steep rule cannot fire";
+  EXPECT_LT(q[1], p.chatter_vibration_climb) << "nor the climb rule";
+  EXPECT_LT(q[2], p.chatter_vibration_rise) << "nor the rise rule";
+  const double cg = p.chatter_vibration_confirmed_growth;
+  EXPECT_GT(share[2], cg * share[1]) << "S rose";
+  EXPECT_GT(share[3], cg * share[2]) << "and rose again";
+  EXPECT_LT(share[3], p.chatter_vibration_backup) << "below S's own backup";
+
+  std::vector<double> ignored, flat;
+  EXPECT_EQ(run(p, {60, 60, 60, 60, 0, 0}, &ignored, &flat), -1)
+      << "the same q with S steady: no rule fires";
+  ASSERT_GE(flat.size(), 4u);
+  EXPECT_LT(flat[3], cg * flat[2]) << "S steady";
+  EdgeParameters no_rule = p;
+  no_rule.chatter_vibration_confirmed = HUGE_VAL;
+  EXPECT_EQ(run(no_rule, {15, 30, 60, 120, 0, 0}, &ignored, nullptr), -1)
+      << "q falls back after it: without the rule, no other fires";
 }
 
 // The channel's white noise passes through the structure's modes into the

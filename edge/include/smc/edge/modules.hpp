@@ -180,6 +180,7 @@ class AutomaticChatterDetector final : public Module {
   uint64_t vibration_run_ = 0;       // of which the last ones in an unbroken run
   bool wide_channel_ = false;        // a finite wideband F_y since the last revolution
   double q1_ = 0, q2_ = 0, q3_ = 0;  // q of the last three judged revolutions (NaN: none)
+  double s1_ = 0, s2_ = 0;           // S of the last two of them (NaN: none, or S not judged)
   int q_above_ = 0;                  // judged revolutions in a row with q above `level`
 };
 

@@ -133,8 +133,10 @@ struct Parameters {
   // for a revolution or two and then repeats itself, so that q falls back);
   // or rises three times in a row, each by more than `steep_growth`, from at
   // least `steep_from` to past `steep` (chatter from low grows fast and may
-  // fall back before a second rise above `rise`); or exceeds `level` in three
-  // in a row; or when
+  // fall back before a second rise above `rise`), or so only to past
+  // `confirmed` where F_z's non-harmonic share rose too, by more than
+  // `confirmed_growth` x in each of the last two (the two channels' evidence
+  // together); or exceeds `level` in three in a row; or when
   // F_z's non-harmonic share exceeds `backup` in three (chatter locked to a
   // spindle harmonic repeats every revolution, and only F_z's spectrum shows
   // it once grown).
@@ -151,6 +153,8 @@ struct Parameters {
   double chatter_vibration_steep = 0.23;
   double chatter_vibration_steep_growth = 1.15;
   double chatter_vibration_steep_from = 0.02;
+  double chatter_vibration_confirmed = 0.18;
+  double chatter_vibration_confirmed_growth = 1.2;
   double chatter_vibration_level = 0.8;
   double chatter_vibration_backup = 0.7;
 
