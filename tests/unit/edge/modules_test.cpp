@@ -1718,7 +1718,8 @@ TEST(AutomaticChatterDetector, ASteepClimbFromLowIsChatter) {
 // rule asks but only to between `confirmed` and `steep`, while chatter's
 // share of F_z energy (S, its own channel) rises by more than
 // `confirmed_growth` in each of the last two revolutions, as on LinuxCNC
-// (q 0.067, 0.133, 0.211, then 0.211 and 0.117; S 0.18, 0.41, 0.69). E fires
+// (q 0.034, 0.067, 0.133, 0.211, then 0.210 and 0.117; S 0.18, 0.41, 0.69
+// over the last three of the climb). E fires
 // on the third rise; without S rising, or without the rule, it does not.
 TEST(AutomaticChatterDetector, ASteepClimbThatSConfirmsIsChatter) {
   const std::initializer_list<double> y = {12, 11, 17, 19, 4, 4};
