@@ -50,10 +50,14 @@
 // own margin (the largest onset level of a stable cut and the smallest of
 // an unstable cut's onset, in the mill's q: smc/edge/runner.hpp,
 // vibration_change), and E's q against the mill's on the labelling runs'
-// comparable revolutions with the mill's q in 0.10-0.30, by speed.
-// Progress goes to stderr. --dump writes
+// comparable revolutions with the mill's q in 0.10-0.30, by speed; then
+// E's q where the mill's is below 0.02 (a cut that repeats itself, before
+// any onset), by speed: what the channel's noise alone makes of q there
+// (--channel-noise 0 shows it without). Progress goes to stderr. --dump writes
 // every revolution of the labelling run (E's rules off) that E judged or
-// skipped in contact (statistic, q, engagement, feed) with its onset, to
+// skipped in contact (statistic, q, engagement, feed, and the mill's own q
+// on the trace's revolution that ends there, -1 where it is not
+// comparable) with its onset, to
 // try other decision rules offline: what happens before E's first
 // detection does not depend on the rule. --threshold 1 switches E's rules
 // off in both runs (and runs each cut once). --dump-samples STEM writes
@@ -193,7 +197,7 @@ int main(int argc, char** argv) {
       }
       std::fprintf(dump,
                    "run,rpm,width,runout,fraction,seed,onset_s,t_s,statistic,vibration_ratio,"
-                   "engagement,feed_per_tooth_mm\n");
+                   "engagement,feed_per_tooth_mm,mill_q\n");
     } else {
       std::fprintf(stderr,
                    "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
@@ -320,6 +324,11 @@ int main(int argc, char** argv) {
   double stable_level = 0, unstable_level = HUGE_VAL;
   std::vector<LateCut> late;
   std::map<double, std::vector<double>> estimate_error;  // rpm -> q_E / q
+  // E's q where the mill's is below kStillQ (a cut that repeats itself):
+  // what the channel's noise alone makes of it, by speed.
+  constexpr double kStillQ = 0.02;
+  std::map<double, std::vector<double>> still;  // rpm -> q_E
+  std::vector<double> mill_q;                   // per labelled revolution
   const double still_period_s = base.operation().slow_period_s();
   for (double rpm : speeds) {
     for (double width : widths) {
@@ -412,34 +421,44 @@ int main(int argc, char** argv) {
                 }
               }
               // E's revolutions end on the trace's (both count the same
-              // clock): pair each judged one with the trace's that ends there.
+              // clock): pair each with the trace's that ends there, for the
+              // mill's own q (-1: none there, or not comparable).
               const double dt = labelled.samples.size() > 1
                                     ? labelled.samples[1].t_s - labelled.samples[0].t_s
                                     : 0;
+              mill_q.assign(labelled.revolutions.size(), -1.0);
               size_t at = 0;
-              for (const auto& r : labelled.revolutions) {
-                if (!(r.chatter_vibration_ratio > 0)) continue;
+              for (size_t i = 0; i < labelled.revolutions.size(); ++i) {
+                const auto& r = labelled.revolutions[i];
                 while (at < changes.size() &&
                        labelled.samples[changes[at].end_sample - 1].t_s < r.t_s - 0.5 * dt) {
                   ++at;
                 }
                 if (at == changes.size()) break;
                 const auto& change = changes[at];
-                if (std::fabs(labelled.samples[change.end_sample - 1].t_s - r.t_s) > 0.5 * dt) {
+                if (std::fabs(labelled.samples[change.end_sample - 1].t_s - r.t_s) > 0.5 * dt ||
+                    !change.comparable) {
                   continue;
                 }
-                if (change.comparable && change.q >= 0.1 && change.q <= 0.3) {
+                mill_q[i] = change.q;
+                if (r.chatter_vibration_ratio > 0 && change.q >= 0.1 && change.q <= 0.3) {
                   estimate_error[rpm].push_back(r.chatter_vibration_ratio / change.q);
+                }
+                // Before the onset only: chatter's own start is not still.
+                if (change.q < kStillQ && (onset < 0 || r.t_s < onset) &&
+                    (r.active & bit(ModuleId::E)) != 0 && r.contact) {
+                  still[rpm].push_back(r.chatter_vibration_ratio);
                 }
               }
             }
             if (dump != nullptr) {
-              for (const auto& r : labelled.revolutions) {
+              for (size_t i = 0; i < labelled.revolutions.size(); ++i) {
+                const auto& r = labelled.revolutions[i];
                 if ((r.active & bit(ModuleId::E)) == 0 || !r.contact) continue;
-                std::fprintf(dump, "%d,%.0f,%.0f,%.0f,%.2f,%d,%.4f,%.4f,%.5f,%.5f,%.4f,%.5f\n",
+                std::fprintf(dump, "%d,%.0f,%.0f,%.0f,%.2f,%d,%.4f,%.4f,%.5f,%.5f,%.4f,%.5f,%.5f\n",
                              run_id, rpm, width, runout, fraction, seed, onset, r.t_s,
                              r.chatter_ratio, r.chatter_vibration_ratio, r.engagement_min,
-                             r.feed_per_tooth_mm);
+                             r.feed_per_tooth_mm, mill_q[i]);
               }
             }
             if (raw_runs != nullptr) {
@@ -609,6 +628,20 @@ int main(int argc, char** argv) {
       };
       std::printf("%6.0f %9zu %8.3f %8.3f %8.3f\n", speed, e.size(), pct(0.05), pct(0.5),
                   pct(0.95));
+    }
+  }
+  if (estimate && !still.empty()) {
+    std::printf(
+        "E's q where the mill's q is below %.2f (the cut repeats itself; labelling runs, before "
+        "any onset, E active in the cut): what the channel's noise makes of it\n%6s %9s %9s %9s "
+        "%8s\n",
+        kStillQ, "rpm", "revs", ">0.10", ">0.15", "largest");
+    for (const auto& [speed, e] : still) {
+      const auto above = [&](double x) {
+        return std::count_if(e.begin(), e.end(), [x](double v) { return v > x; });
+      };
+      std::printf("%6.0f %9zu %9td %9td %8.3f\n", speed, e.size(), above(0.10), above(0.15),
+                  *std::max_element(e.begin(), e.end()));
     }
   }
   if (dump != nullptr) std::fclose(dump);
