@@ -83,9 +83,9 @@ TEST(RtWallClock, TicksHistogramAndARealOverrun) {
   // least two boundaries were skipped and the stall is flagged once: on the
   // tick after it -- or on the spinning tick itself, when the machine woke
   // it past its own deadline already (one stall, one flag:
-  // RtLoop.WakeUpPastNextBoundaryIsOneOverrun). A run under load failed
-  // on the tick after alone: 1 overrun, 2 missed periods, a wake-up of
-  // 534 us at 500 us.
+  // RtLoop.WakeUpPastNextBoundaryIsOneOverrun). Checking the tick after
+  // only, a run under load failed: 1 overrun, 2 missed periods, a wake-up
+  // of 534 us at 500 us.
   const TickInfo& spin = ctx.infos[kSpinTick];
   const bool flagged_itself = spin.overrun && spin.woke > spin.scheduled + period;
   EXPECT_TRUE(flagged_itself || ctx.infos[kSpinTick + 1].overrun)
