@@ -150,6 +150,11 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
     }
   }
   if (sim.noise_rms_n() < 0) throw ConfigError("simulation.noise_rms_n: must be >= 0");
+  if (const auto order = sim.f_y_wide_order();
+      order != 0 && (order > machining::AntiAliasLowPass::kMaxOrder || order % 2 != 0)) {
+    throw ConfigError("simulation.f_y_wide_order: must be even, 2-8 (got " + std::to_string(order) +
+                      "); fix: 0 or 2 for the shipped channel, e.g. 8");
+  }
   const double lag = sim.feed_drive_lag_s();
   if (!(lag >= 0 && lag <= 1)) {
     throw ConfigError("simulation.feed_drive_lag_s: must be in [0, 1] s (got " +
@@ -174,7 +179,8 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
   s.lp_y.configure(sim.f_y_cutoff_hz(), rate);
   s.lp_z.configure(sim.f_z_cutoff_hz(), rate);
   s.lp_y_wide.configure(
-      sim.f_y_wide_cutoff_hz() > 0 ? sim.f_y_wide_cutoff_hz() : sim.f_z_cutoff_hz(), rate);
+      sim.f_y_wide_cutoff_hz() > 0 ? sim.f_y_wide_cutoff_hz() : sim.f_z_cutoff_hz(), rate,
+      sim.f_y_wide_order() > 0 ? static_cast<int>(sim.f_y_wide_order()) : 2);
   s.removed.assign(static_cast<size_t>(std::ceil(s.length() / s.bin_mm)) + 1, 0.0);
   const auto& w = s.model.workpiece;
   const double y_lo = w.offset_mm - w.width_mm / 2, y_hi = w.offset_mm + w.width_mm / 2;

@@ -113,7 +113,10 @@ double AutomaticChatterDetector::vibration_correction(double frequency_hz,
   }
   const double fc = p_.vibration_sensor_cutoff_hz;
   const double r = fc > 0 ? frequency_hz / fc : 0;
-  const double sensor = 1 / (1 + r * r * r * r);  // |Butterworth|^2, second order
+  // |Butterworth|^2 of the channel's order: 1 / (1 + r^(2 order)).
+  double r_2n = 1;
+  for (int i = 0; i < p_.vibration_sensor_order; ++i) r_2n *= r * r;
+  const double sensor = 1 / (1 + r_2n);
   const double below = std::norm(held) * sensor;
   if (held_norm != nullptr) *held_norm = std::norm(held);
   return below > 0 ? std::min(std::norm(structure) / below, kMaxCorrection) : kMaxCorrection;

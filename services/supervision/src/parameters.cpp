@@ -185,6 +185,14 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   p.vibration_sensor_cutoff_hz =
       or_default("wideband_cutoff_hz", op.wideband_cutoff_hz(), 1000.0, 1.0, 1e6,
                  "set the wideband F_y channel's anti-alias cut-off, e.g. 500 (0: 1000 Hz)");
+  if (const auto order = op.wideband_filter_order(); order == 0) {
+    p.vibration_sensor_order = 2;
+  } else if (order % 2 != 0 || order > 8) {
+    o.fail("wideband_filter_order", "must be even, 2-8", order,
+           "give the wideband channel's Butterworth order, e.g. 2 (0: 2)");
+  } else {
+    p.vibration_sensor_order = static_cast<int>(order);
+  }
   p.vibration_sensor_noise_rms_n =
       or_default("wideband_noise_rms_n", op.wideband_noise_rms_n(), 0.0, 0.0, 1000.0,
                  "set the wideband F_y channel's noise in N rms, e.g. 2 (0: none taken out)");

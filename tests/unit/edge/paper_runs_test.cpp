@@ -587,6 +587,24 @@ TEST(SimulatedFeedDrive, FollowsTheCommandThroughAFirstOrderLag) {
   }
 }
 
+// The wideband channel's filter (simulation.f_y_wide_order): a Butterworth
+// of even order up to 8; any other is refused naming the field.
+TEST(SimulatedDynamometer, AWidebandFilterOrderItDoesNotHaveIsRefused) {
+  auto raw = test::shipped_config("smc2.textproto");
+  const double dt = raw.operation().sample_period_s();
+  raw.mutable_simulation()->set_f_y_wide_order(8);
+  EXPECT_NO_THROW(SimulatedMill(raw.milling_model(), raw.simulation(), dt));
+  for (const uint32_t bad : {5u, 10u}) {
+    raw.mutable_simulation()->set_f_y_wide_order(bad);
+    try {
+      SimulatedMill mill(raw.milling_model(), raw.simulation(), dt);
+      ADD_FAILURE() << "filter order " << bad << " was accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("simulation.f_y_wide_order"), std::string::npos);
+    }
+  }
+}
+
 // The simulated mill's tool condition (simulation.tooth_breaks, wear_per_m):
 // SMC I on the paper's part with tooth 2 losing its edge at 10 s. From the
 // break on, the next tooth cuts a double chip: the per-revolution F_Y peak

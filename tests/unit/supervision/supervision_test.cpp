@@ -101,6 +101,21 @@ TEST(Parameters, TheWidebandCutoffDefaultsToTheFzChannelsAndABadOneIsRefused) {
   EXPECT_NE(why.find("supervisor_config.operation.wideband_cutoff_hz"), std::string::npos) << why;
 }
 
+// The wideband channel's filter order: 0 is the second order; an odd one,
+// or one above 8, is refused naming the field.
+TEST(Parameters, TheWidebandFilterOrderDefaultsToTheSecondAndABadOneIsRefused) {
+  auto cfg = shipped("smc2.textproto");
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_order, 2);
+  cfg.mutable_operation()->set_wideband_filter_order(8);
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_order, 8);
+  for (const uint32_t bad : {3u, 10u}) {
+    cfg.mutable_operation()->set_wideband_filter_order(bad);
+    const std::string why = refusal(cfg);
+    EXPECT_NE(why.find("supervisor_config.operation.wideband_filter_order"), std::string::npos)
+        << why;
+  }
+}
+
 TEST(Parameters, TheWidebandNoiseIsTheShippedChannelsAndABadOneIsRefused) {
   auto cfg = shipped("smc2.textproto");
   EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_noise_rms_n, 2);

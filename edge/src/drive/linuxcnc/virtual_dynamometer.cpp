@@ -39,7 +39,8 @@
 //                              mill's simulation.tooth_breaks); 0: none
 //   out float force-x/y/z      force on the tool (N), filtered, with noise
 //   out float force-y-wide     F_y through the wideband filter
-//                              (simulation.f_y_wide_cutoff_hz), with noise
+//                              (simulation.f_y_wide_cutoff_hz and
+//                              f_y_wide_order), with noise
 //                              from a stream of its own (the simulated mill's
 //                              f_y_wide_n)
 //   out bit   wideband         true: this sensor has the wideband F_y channel
@@ -189,6 +190,11 @@ std::unique_ptr<Dyno> make_dyno() {
   }
   mc::MillingModel model = mc::from_proto(mm, "milling_model");
   const auto& s = cfg.simulation();
+  if (const auto order = s.f_y_wide_order();
+      order != 0 && (order > mc::AntiAliasLowPass::kMaxOrder || order % 2 != 0)) {
+    throw std::runtime_error(std::string(config) + ": simulation.f_y_wide_order: must be even, " +
+                             "2-8 (got " + std::to_string(order) + "); fix: 0 or 2, e.g. 8");
+  }
   const double period_s = 0.5e-3;  // the servo period the shipped INI sets
   mc::SimulatorOptions so;
   so.sample_period_s = period_s;
@@ -206,7 +212,7 @@ std::unique_ptr<Dyno> make_dyno() {
   d->lp_y.configure(s.f_y_cutoff_hz(), rate);
   d->lp_z.configure(s.f_z_cutoff_hz(), rate);
   d->lp_y_wide.configure(s.f_y_wide_cutoff_hz() > 0 ? s.f_y_wide_cutoff_hz() : s.f_z_cutoff_hz(),
-                         rate);
+                         rate, s.f_y_wide_order() > 0 ? static_cast<int>(s.f_y_wide_order()) : 2);
   d->noise_rms_n = std::max(0.0, s.noise_rms_n());
   d->rng.seed(static_cast<std::uint64_t>(seed));
   // Derived from the seed and different from it, as the simulated mill's.

@@ -1,6 +1,7 @@
 #pragma once
-// The anti-alias filter in front of a force sensor's sampler: a second-order
-// Butterworth low-pass by the bilinear transform (with pre-warping), run at
+// The anti-alias filter in front of a force sensor's sampler: a Butterworth
+// low-pass of even order (2 by default, up to kMaxOrder) as a cascade of
+// second-order sections by the bilinear transform (with pre-warping), run at
 // the simulator's internal step over the force of every internal step
 // (StepForceTrace). The simulated mill and the virtual dynamometer on
 // LinuxCNC model their sensor with it, so the two plants read alike.
@@ -8,6 +9,7 @@
 // it never sinks into subnormal numbers (which would make each step a hundred
 // times slower in air).
 
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -15,32 +17,54 @@ namespace smc::machining {
 
 class AntiAliasLowPass {
  public:
+  static constexpr int kMaxOrder = 8;
+
   // A cut-off of 0, or at or above Nyquist, means no filtering worth the
-  // name: the filter then sits at 0.45 x the rate.
-  void configure(double cutoff_hz, double rate_hz) noexcept {
+  // name: the filter then sits at 0.45 x the rate. An odd or out-of-range
+  // order is the caller's error (the configurations are checked before).
+  void configure(double cutoff_hz, double rate_hz, int order = 2) noexcept {
     if (!(cutoff_hz > 0 && cutoff_hz < rate_hz / 2)) cutoff_hz = rate_hz * 0.45;
+    if (order < 2 || order > kMaxOrder || order % 2 != 0) order = 2;
+    sections_ = order / 2;
     const double k = std::tan(std::numbers::pi * cutoff_hz / rate_hz);
-    const double q = std::numbers::sqrt2 / 2;
-    const double norm = 1.0 / (1.0 + k / q + k * k);
-    b0_ = k * k * norm;
-    b1_ = 2 * b0_;
-    b2_ = b0_;
-    a1_ = 2 * (k * k - 1) * norm;
-    a2_ = (1 - k / q + k * k) * norm;
+    for (int i = 0; i < sections_; ++i) {
+      // The Butterworth poles in conjugate pairs: section i's quality factor
+      // is 1 / (2 cos θ_i), θ_i = (2i + 1) π / (2 order).
+      const double theta = (2.0 * i + 1) * std::numbers::pi / (2.0 * order);
+      const double q = 1 / (2 * std::cos(theta));
+      Section& s = sections_at_[static_cast<size_t>(i)];
+      const double norm = 1.0 / (1.0 + k / q + k * k);
+      s.b0 = k * k * norm;
+      s.b1 = 2 * s.b0;
+      s.b2 = s.b0;
+      s.a1 = 2 * (k * k - 1) * norm;
+      s.a2 = (1 - k / q + k * k) * norm;
+    }
     reset();
   }
-  void reset() noexcept { z1_ = z2_ = 0; }
+  int order() const noexcept { return 2 * sections_; }
+  void reset() noexcept {
+    for (Section& s : sections_at_) s.z1 = s.z2 = 0;
+  }
   double operator()(double x) noexcept {
-    const double y = b0_ * x + z1_;
-    z1_ = b1_ * x - a1_ * y + z2_;
-    z2_ = b2_ * x - a2_ * y;
-    if (std::fabs(z1_) < 1e-30) z1_ = 0;
-    if (std::fabs(z2_) < 1e-30) z2_ = 0;
-    return y;
+    for (int i = 0; i < sections_; ++i) {
+      Section& s = sections_at_[static_cast<size_t>(i)];
+      const double y = s.b0 * x + s.z1;
+      s.z1 = s.b1 * x - s.a1 * y + s.z2;
+      s.z2 = s.b2 * x - s.a2 * y;
+      if (std::fabs(s.z1) < 1e-30) s.z1 = 0;
+      if (std::fabs(s.z2) < 1e-30) s.z2 = 0;
+      x = y;
+    }
+    return x;
   }
 
  private:
-  double b0_ = 1, b1_ = 0, b2_ = 0, a1_ = 0, a2_ = 0, z1_ = 0, z2_ = 0;
+  struct Section {
+    double b0 = 1, b1 = 0, b2 = 0, a1 = 0, a2 = 0, z1 = 0, z2 = 0;
+  };
+  std::array<Section, kMaxOrder / 2> sections_at_{};
+  int sections_ = 1;
 };
 
 }  // namespace smc::machining

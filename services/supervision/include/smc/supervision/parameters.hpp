@@ -110,10 +110,12 @@ struct Parameters {
   static constexpr int kMaxVibrationModes = 4;
   VibrationMode vibration_modes[kMaxVibrationModes] = {};
   int vibration_mode_count = 0;
-  // The wideband F_y channel's anti-alias filter (second-order
-  // Butterworth), whose attenuation module E's estimate undoes
-  // (operation.wideband_cutoff_hz; 0 there: 1000 Hz, the F_z channel's).
+  // The wideband F_y channel's anti-alias filter (a Butterworth of
+  // vibration_sensor_order), whose attenuation module E's estimate undoes
+  // (operation.wideband_cutoff_hz; 0 there: 1000 Hz, the F_z channel's;
+  // operation.wideband_filter_order; 0 there: 2).
   double vibration_sensor_cutoff_hz = 1000;
+  int vibration_sensor_order = 2;
   // The wideband F_y channel's noise (N rms, white after the filter), whose
   // expected share module E takes out of both energies of q
   // (operation.wideband_noise_rms_n; 0: none).
