@@ -10,7 +10,8 @@
 //       [--vibration-jump-dip X] [--vibration-steep X] [--vibration-steep-growth X]
 //       [--vibration-steep-from X] [--vibration-confirmed X]
 //       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-backup X]
-//       [--vibration-noise N] [--channel-noise N] [--mill-model FILE] [--no-regeneration]
+//       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
+//       [--mill-model FILE] [--no-regeneration]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
@@ -36,7 +37,10 @@
 // --channel-noise N: the simulated dynamometer's white noise on every force
 // channel (simulation.noise_rms_n, 2 N rms in the configuration), and the
 // noise E takes out with it unless --vibration-noise says otherwise; 0 shows
-// what E's estimate does without it. --mill-model FILE: the
+// what E's estimate does without it. --wide-cutoff HZ and --wide-order N:
+// the simulated wideband F_y channel's anti-alias filter (a Butterworth,
+// even order 2-8; the configuration's 500 Hz, second order) and what E is
+// told of it. --mill-model FILE: the
 // simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
 // critical depths keep the configuration's. --no-regeneration: the mill
@@ -125,6 +129,8 @@ int main(int argc, char** argv) {
   bool force_only = false;
   bool no_regeneration = false;
   double channel_noise = -1;  // < 0: the configuration's
+  double wide_cutoff = -1;    // < 0: the configuration's
+  int wide_order = 0;         // 0: the configuration's
   // E's parameters the study may override (< 0: the shipped value).
   struct Knob {
     const char* flag;
@@ -175,6 +181,10 @@ int main(int argc, char** argv) {
       no_regeneration = true;
     } else if (std::strcmp(argv[i], "--channel-noise") == 0 && more) {
       channel_noise = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--wide-cutoff") == 0 && more) {
+      wide_cutoff = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--wide-order") == 0 && more) {
+      wide_order = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
       confirm_override = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--dump-samples") == 0 && more) {
@@ -209,7 +219,8 @@ int main(int argc, char** argv) {
                    "[--vibration-steep X] [--vibration-steep-growth X] [--vibration-steep-from X] "
                    "[--vibration-confirmed X] [--vibration-confirmed-growth X] [--vibration-level "
                    "X] [--vibration-backup X] [--vibration-noise N] "
-                   "[--channel-noise N] [--mill-model FILE] [--no-regeneration]\n",
+                   "[--channel-noise N] [--wide-cutoff HZ] [--wide-order N] [--mill-model FILE] "
+                   "[--no-regeneration]\n",
                    argv[0]);
       return 2;
     }
@@ -235,6 +246,14 @@ int main(int argc, char** argv) {
   if (channel_noise >= 0) {
     base.mutable_simulation()->set_noise_rms_n(channel_noise);
     base.mutable_operation()->set_wideband_noise_rms_n(channel_noise);
+  }
+  if (wide_cutoff > 0) {
+    base.mutable_simulation()->set_f_y_wide_cutoff_hz(wide_cutoff);
+    base.mutable_operation()->set_wideband_cutoff_hz(wide_cutoff);
+  }
+  if (wide_order > 0) {
+    base.mutable_simulation()->set_f_y_wide_order(static_cast<uint32_t>(wide_order));
+    base.mutable_operation()->set_wideband_filter_order(static_cast<uint32_t>(wide_order));
   }
   const double fpt = 0.1;
   // The study's rules on E's parameters (the configuration message does not
