@@ -3,13 +3,13 @@
 // 1 / sqrt(1 + (f / f_c)^(2 order)), the bilinear transform's pre-warping
 // aside.
 
+#include "smc/machining/anti_alias.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-
-#include "smc/machining/anti_alias.hpp"
 
 namespace mc = smc::machining;
 
