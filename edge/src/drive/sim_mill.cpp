@@ -150,8 +150,7 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
     }
   }
   if (sim.noise_rms_n() < 0) throw ConfigError("simulation.noise_rms_n: must be >= 0");
-  if (const auto order = sim.f_y_wide_order();
-      order != 0 && (order > machining::AntiAliasLowPass::kMaxOrder || order % 2 != 0)) {
+  if (const auto order = sim.f_y_wide_order(); !machining::AntiAliasLowPass::is_order(order)) {
     throw ConfigError("simulation.f_y_wide_order: must be even, 2-8 (got " + std::to_string(order) +
                       "); fix: 0 or 2 for the shipped channel, e.g. 8");
   }

@@ -190,8 +190,7 @@ std::unique_ptr<Dyno> make_dyno() {
   }
   mc::MillingModel model = mc::from_proto(mm, "milling_model");
   const auto& s = cfg.simulation();
-  if (const auto order = s.f_y_wide_order();
-      order != 0 && (order > mc::AntiAliasLowPass::kMaxOrder || order % 2 != 0)) {
+  if (const auto order = s.f_y_wide_order(); !mc::AntiAliasLowPass::is_order(order)) {
     throw std::runtime_error(std::string(config) + ": simulation.f_y_wide_order: must be even, " +
                              "2-8 (got " + std::to_string(order) + "); fix: 0 or 2, e.g. 8");
   }

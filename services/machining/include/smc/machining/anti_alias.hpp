@@ -18,6 +18,10 @@ namespace smc::machining {
 class AntiAliasLowPass {
  public:
   static constexpr int kMaxOrder = 8;
+  // An order a configuration may give: 0 (the second) or even, 2-kMaxOrder.
+  static constexpr bool is_order(unsigned order) noexcept {
+    return order <= static_cast<unsigned>(kMaxOrder) && order % 2 == 0;
+  }
 
   // A cut-off of 0, or at or above Nyquist, means no filtering worth the
   // name: the filter then sits at 0.45 x the rate. An odd or out-of-range
