@@ -11,7 +11,7 @@
 //       [--vibration-steep-from X] [--vibration-confirmed X]
 //       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-backup X]
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
-//       [--mill-model FILE] [--no-regeneration]
+//       [--sample-period S] [--mill-model FILE] [--no-regeneration]
 //
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
@@ -40,7 +40,11 @@
 // what E's estimate does without it. --wide-cutoff HZ and --wide-order N:
 // the simulated wideband F_y channel's anti-alias filter (a Butterworth,
 // even order 2-8; the configuration's 500 Hz, second order) and what E is
-// told of it. --mill-model FILE: the
+// told of it. --sample-period S: the edge samples every S seconds
+// (operation.sample_period_s; the configuration's 0.0005, the paper's 2 kHz),
+// and so do the wideband channel E reads and the vibration the label reads;
+// 0.00025 shows what E and the label make of a channel sampled twice as
+// fast. --mill-model FILE: the
 // simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
 // critical depths keep the configuration's. --no-regeneration: the mill
@@ -130,6 +134,7 @@ int main(int argc, char** argv) {
   bool no_regeneration = false;
   double channel_noise = -1;  // < 0: the configuration's
   double wide_cutoff = -1;    // < 0: the configuration's
+  double sample_period = -1;  // < 0: the configuration's
   int wide_order = 0;         // 0: the configuration's
   // E's parameters the study may override (< 0: the shipped value).
   struct Knob {
@@ -183,6 +188,8 @@ int main(int argc, char** argv) {
       channel_noise = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--wide-cutoff") == 0 && more) {
       wide_cutoff = std::atof(argv[++i]);
+    } else if (std::strcmp(argv[i], "--sample-period") == 0 && more) {
+      sample_period = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--wide-order") == 0 && more) {
       wide_order = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
@@ -219,7 +226,8 @@ int main(int argc, char** argv) {
                    "[--vibration-steep X] [--vibration-steep-growth X] [--vibration-steep-from X] "
                    "[--vibration-confirmed X] [--vibration-confirmed-growth X] [--vibration-level "
                    "X] [--vibration-backup X] [--vibration-noise N] "
-                   "[--channel-noise N] [--wide-cutoff HZ] [--wide-order N] [--mill-model FILE] "
+                   "[--channel-noise N] [--wide-cutoff HZ] [--wide-order N] [--sample-period S] "
+                   "[--mill-model FILE] "
                    "[--no-regeneration]\n",
                    argv[0]);
       return 2;
@@ -251,6 +259,7 @@ int main(int argc, char** argv) {
     base.mutable_simulation()->set_f_y_wide_cutoff_hz(wide_cutoff);
     base.mutable_operation()->set_wideband_cutoff_hz(wide_cutoff);
   }
+  if (sample_period > 0) base.mutable_operation()->set_sample_period_s(sample_period);
   if (wide_order > 0) {
     base.mutable_simulation()->set_f_y_wide_order(static_cast<uint32_t>(wide_order));
     base.mutable_operation()->set_wideband_filter_order(static_cast<uint32_t>(wide_order));
@@ -286,7 +295,16 @@ int main(int argc, char** argv) {
     run = run_virtual(core, opts);
     return summarize(core, run);
   };
-  EdgeParameters shown = edge_config_from_proto(base).params;
+  // The flags' configuration, checked once here: a bad value (a sample
+  // period the control periods are no multiple of, say) is named, not thrown.
+  EdgeParameters shown;
+  try {
+    shown = edge_config_from_proto(base).params;
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "%s: the configuration these flags make is refused:\n%s\n", argv[0],
+                 e.what());
+    return 2;
+  }
   tune(shown);
   const bool estimate = shown.vibration_mode_count > 0;
   // S's threshold in use: the backup's beside the estimate.
@@ -321,10 +339,11 @@ int main(int argc, char** argv) {
         shown.chatter_threshold, shown.chatter_confirm_revolutions);
   }
   std::printf(
-      "; band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms; programmed %.2f mm/tooth, %d "
-      "seeds; the mill: %s%s\n\n",
+      "; band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms, a sample every %.2f ms; "
+      "programmed %.2f mm/tooth, %d seeds; the mill: %s%s\n\n",
       base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
-      base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(), fpt, seeds,
+      base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(),
+      1000 * shown.sample_period_s, fpt, seeds,
       mill_model_file.empty() ? "the configuration's model" : mill_model_file.c_str(),
       no_regeneration ? ", without regeneration (no cut can chatter: every onset the label "
                         "finds is the forced response's)"
