@@ -190,6 +190,13 @@ int main(int argc, char** argv) {
       wide_cutoff = std::atof(argv[++i]);
     } else if (std::strcmp(argv[i], "--sample-period") == 0 && more) {
       sample_period = std::atof(argv[++i]);
+      if (!(sample_period > 0)) {
+        std::fprintf(stderr,
+                     "%s: --sample-period %s: must be a period in seconds above 0 (the "
+                     "configuration's is 0.0005)\n",
+                     argv[0], argv[i]);
+        return 2;
+      }
     } else if (std::strcmp(argv[i], "--wide-order") == 0 && more) {
       wide_order = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
