@@ -266,7 +266,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   // a revolution; NaN: unknown, judged): the part's end takes part of the
   // arc every revolution, however slowly the mean moves, and with runout
   // that change read as chatter at stable exits of the detector study
-  // (edge/README.md, module E). Entering, it is judged: most chatter starts
+  // (edge/CHATTER.md). Entering, it is judged: most chatter starts
   // there, none started while leaving in that study.
   const double engagement = s.engagement;
   // A sudden change of cut that the drive's engagement does not describe (a
@@ -327,7 +327,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       // two and then repeats itself, so that q falls back while the
       // vibration keeps its size (the paper's cut on the simulated mill at
       // 1509 rpm: 0.124, 0.273, 0.269, then 0.117); a stable cut's q never
-      // jumps by a fifth to above it and holds (edge/README.md, "The
+      // jumps by a fifth to above it and holds (edge/CHATTER.md, "The
       // rules' margins").
       const double jump = p_.chatter_vibration_jump;
       const bool jumped = q1_ > jump && q1_ > p_.chatter_vibration_jump_growth * q2_ && q > jump &&
@@ -337,7 +337,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       // that starts from low grows fast (LinuxCNC's job-shop cut: 0.069,
       // 0.119, 0.204, 0.237, then 0.140) and may fall back before the rise
       // rule's second rise above `rise`; a stable cut's q climbs that
-      // steeply only to below it (edge/README.md, "The rules' margins").
+      // steeply only to below it (edge/CHATTER.md, "The rules' margins").
       // Below `steep_from` q is a repeating cut's own, whose rises mean
       // nothing (rounding, where the cut repeats itself exactly).
       const double sg = p_.chatter_vibration_steep_growth;
@@ -348,7 +348,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       // share S (judged on its own channel) rose by more than
       // `confirmed_growth` in each of the last two revolutions: the two
       // channels' evidence together. A stable cut's q climbs steeply while
-      // S rises so only to far below it (edge/README.md, "The rules'
+      // S rises so only to far below it (edge/CHATTER.md, "The rules'
       // margins"); chatter on LinuxCNC is caught a revolution earlier.
       const double sq = steady && !leaving ? ratio : std::numeric_limits<double>::quiet_NaN();
       const double cg = p_.chatter_vibration_confirmed_growth;

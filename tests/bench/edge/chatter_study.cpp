@@ -30,7 +30,7 @@
 // detections, the largest statistic), unstable cuts the delay from the onset
 // to E's detection, in revolutions. E judges the vibration it estimates
 // from the simulated dynamometer's wideband F_y channel, with S as the
-// backup (edge/README.md, module E); --force-only takes the estimate away
+// backup (edge/CHATTER.md); --force-only takes the estimate away
 // (S alone, as on a sensor without that channel), --vibration-* set its
 // rules' parameters, and --vibration-noise the channel noise it takes out
 // (N rms; the configuration's operation.wideband_noise_rms_n otherwise).

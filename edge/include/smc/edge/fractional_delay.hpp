@@ -7,7 +7,7 @@
 // whose loss depends on where between the samples the point falls: halfway
 // between them, a 650 Hz component (the tool mode) sampled at 2 kHz comes
 // out at 0.52 of its amplitude, so a vibration that repeats exactly reads as
-// a change of 48 % of that component (edge/README.md, module E). With 16
+// a change of 48 % of that component (edge/CHATTER.md). With 16
 // taps each side and a Kaiser window of beta 5, scaled so that a constant
 // passes exactly, a tone's error is below 0.2 % up to 0.65 of the Nyquist
 // frequency, 0.3 % up to 0.8 and 0.5 % up to 0.9, wherever the point falls

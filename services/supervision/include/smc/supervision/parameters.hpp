@@ -101,7 +101,7 @@ struct Parameters {
   // The machine's structure in y (milling_model.structure: tool_y, then
   // part_y; both move the tool against the part under the same force), for
   // module E's estimate of the tool-part vibration from the wideband F_y
-  // channel (edge/README.md, module E). None: E judges F_z alone.
+  // channel (edge/CHATTER.md). None: E judges F_z alone.
   struct VibrationMode {
     double natural_frequency_rad_s = 0;
     double damping_ratio = 0;
