@@ -179,6 +179,13 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
     c.comparable = ok && energy > 0;
     c.q = energy > 0 ? std::sqrt(diff / energy) : 0;
   }
+  mark_onsets(out);
+  return out;
+}
+
+void mark_onsets(std::vector<RevolutionChange>& out) {
+  const size_t revs = out.size();
+  for (RevolutionChange& c : out) c.onset_level = 0;
   // Entering the part the statistic starts high and falls as the engagement
   // settles; chatter makes it grow. Onset: a comparable revolution above the
   // threshold and above the one before, followed by a larger one -- or by
@@ -196,7 +203,6 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
       out[r].onset_level = std::min(c.q, next.q);
     }
   }
-  return out;
 }
 
 namespace {

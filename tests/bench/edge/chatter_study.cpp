@@ -57,7 +57,10 @@
 // after); the label's
 // own margin (the largest onset level of a stable cut and the smallest of
 // an unstable cut's onset, in the mill's q: smc/edge/runner.hpp,
-// vibration_change), and E's q against the mill's on the labelling runs'
+// vibration_change); the label's own rule run as a detector on the mill's
+// q read with a relative error of 0-10 % drawn per revolution (5 draws
+// each, counted as E's decisions are: how exact a reading of q the goal
+// asks for on these labels); E's q against the mill's on the labelling runs'
 // comparable revolutions with the mill's q in 0.10-0.30, by speed; then
 // E's q where the mill's is below 0.02 (a cut that repeats itself, before
 // any onset), by speed: what the channel's noise alone makes of q there
@@ -85,6 +88,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -120,6 +124,47 @@ struct LateCut {
   int above = 0;           // revolutions from the onset on with q above the onset's 0.15
   double later_most = -1;  // the largest q after those, to the end of the pass (-1: none)
 };
+
+// A cut's labelling run, revolution by revolution (the mill's own q), kept
+// to run the label's own rule again on q read with an error.
+struct LabelledCut {
+  double rpm = 0, onset_s = -1;
+  std::vector<RevolutionChange> changes;
+  std::vector<double> end_s;  // each revolution's last sample
+};
+
+// The label's own rule run as a detector on each cut's q read with a
+// relative error drawn per revolution (Gaussian, sigma): what it decides,
+// counted as E's decisions are. It decides at the end of the revolution
+// that confirms an onset (the next, or the one after a pause).
+struct RuleOnError {
+  int false_detections = 0, detected = 0, within3 = 0;
+};
+RuleOnError label_rule_on_error(const std::vector<LabelledCut>& cuts, double sigma, unsigned draw) {
+  std::mt19937_64 rng(draw);
+  std::normal_distribution<double> error(0.0, sigma);
+  RuleOnError out;
+  std::vector<RevolutionChange> read;
+  for (const LabelledCut& cut : cuts) {
+    read = cut.changes;
+    for (RevolutionChange& c : read) c.q *= 1 + error(rng);
+    mark_onsets(read);
+    double decided = -1;
+    for (size_t r = 0; r + 1 < read.size(); ++r) {
+      if (!(read[r].onset_level > kChatterOnsetQ)) continue;
+      const bool grew = !read[r + 1].comparable || read[r + 1].q > read[r].q;
+      decided = cut.end_s[grew || r + 2 >= read.size() ? r + 1 : r + 2];
+      break;
+    }
+    if (cut.onset_s < 0) {
+      out.false_detections += decided >= 0 ? 1 : 0;
+    } else if (decided >= 0) {
+      ++out.detected;
+      if ((decided - cut.onset_s) * cut.rpm / 60.0 <= 3.0) ++out.within3;
+    }
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -167,7 +212,55 @@ int main(int argc, char** argv) {
   std::FILE* raw_samples = nullptr;
   std::FILE* raw_revs = nullptr;
   uint64_t raw_sample_at = 0, raw_rev_at = 0;
+  // The flags, one line (the head of this file says what each does).
+  auto usage = [&](std::FILE* to) {
+    std::fprintf(to,
+                 "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
+                 "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose] "
+                 "[--dump FILE.csv] [--dump-samples STEM] [--force-only] [--vibration-rise X] "
+                 "[--vibration-climb X] [--vibration-pause X] [--vibration-growth X] "
+                 "[--vibration-net X] [--vibration-net-growth X] [--vibration-net-dip X] "
+                 "[--vibration-jump X] [--vibration-jump-growth X] [--vibration-jump-dip X] "
+                 "[--vibration-steep X] [--vibration-steep-growth X] [--vibration-steep-from X] "
+                 "[--vibration-confirmed X] [--vibration-confirmed-growth X] [--vibration-level "
+                 "X] [--vibration-backup X] [--vibration-noise N] "
+                 "[--channel-noise N] [--wide-cutoff HZ] [--wide-order N] [--sample-period S] "
+                 "[--mill-model FILE] "
+                 "[--no-regeneration]\n",
+                 argv[0]);
+  };
   for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+      usage(stdout);
+      std::printf(
+          "\nModule E on the simulated mill: each cut (speed x width x depth x runout x seed) "
+          "runs with E's rules\noff, where the mill's own vibration labels it, then with E as "
+          "it ships; prints false detections,\ndetections within 3 revolutions of the onset, "
+          "the late and missed cuts, the label's margin and\nE's q against the mill's.\n\n"
+          "  --seeds N            noise seeds per cut (2)\n"
+          "  --speeds LIST        rpm (750,1100,1500,2000,2500,3000); --quick: 1100,2500 at 37 mm, "
+          "one seed\n"
+          "  --widths LIST        mm (25,37,50)\n"
+          "  --fractions LIST     depths, of the critical depth at that speed, width and feed "
+          "(0.3,0.6,0.9,1.3,1.8)\n"
+          "  --runouts LIST_UM    eccentric cutter runout, um (0)\n"
+          "  --mill-model FILE    the mill cuts with this model; E and the critical depths keep "
+          "the configuration's\n"
+          "  --no-regeneration    no cut can chatter: every onset and detection is a false one\n"
+          "  --force-only         S alone (a sensor without the wideband F_y channel)\n"
+          "  --vibration-* X      E's rules' values (edge/CHATTER.md); --threshold, --confirm: "
+          "S's\n"
+          "  --channel-noise N    the dynamometer's noise, N rms (2), and the noise E takes out\n"
+          "  --wide-cutoff HZ, --wide-order N   the wideband channel's filter (500 Hz, 2nd "
+          "order)\n"
+          "  --sample-period S    the edge's sample period (0.0005)\n"
+          "  --dump FILE.csv, --dump-samples STEM   the labelling runs, to try other rules "
+          "offline\n"
+          "  --verbose            each run and its revolutions near the threshold, on stderr\n"
+          "\nThe head of tests/bench/edge/chatter_study.cpp has the details; edge/README.md "
+          "the figures.\n");
+      return 0;
+    }
     if (grid.take(argc, argv, i)) continue;
     const bool more = i + 1 < argc;
     Knob* knob = nullptr;
@@ -223,20 +316,9 @@ int main(int argc, char** argv) {
                    "run,rpm,width,runout,fraction,seed,onset_s,t_s,statistic,vibration_ratio,"
                    "engagement,feed_per_tooth_mm,mill_q\n");
     } else {
-      std::fprintf(stderr,
-                   "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
-                   "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose] "
-                   "[--dump FILE.csv] [--dump-samples STEM] [--force-only] [--vibration-rise X] "
-                   "[--vibration-climb X] [--vibration-pause X] [--vibration-growth X] "
-                   "[--vibration-net X] [--vibration-net-growth X] [--vibration-net-dip X] "
-                   "[--vibration-jump X] [--vibration-jump-growth X] [--vibration-jump-dip X] "
-                   "[--vibration-steep X] [--vibration-steep-growth X] [--vibration-steep-from X] "
-                   "[--vibration-confirmed X] [--vibration-confirmed-growth X] [--vibration-level "
-                   "X] [--vibration-backup X] [--vibration-noise N] "
-                   "[--channel-noise N] [--wide-cutoff HZ] [--wide-order N] [--sample-period S] "
-                   "[--mill-model FILE] "
-                   "[--no-regeneration]\n",
-                   argv[0]);
+      std::fprintf(stderr, "%s: %s: %s (--help says what each flag does)\n", argv[0], argv[i],
+                   argv[i][0] == '-' ? "an unknown flag, or one without its value" : "not a flag");
+      usage(stderr);
       return 2;
     }
   }
@@ -374,6 +456,7 @@ int main(int argc, char** argv) {
   constexpr double kStillQ = 0.02;
   std::map<double, std::vector<double>> still;  // rpm -> q_E
   std::vector<double> mill_q;                   // per labelled revolution
+  std::vector<LabelledCut> labelled_cuts;
   const double still_period_s = base.operation().slow_period_s();
   for (double rpm : speeds) {
     for (double width : widths) {
@@ -431,6 +514,13 @@ int main(int argc, char** argv) {
             ++run_id;
             {
               const auto changes = vibration_change(labelled, still_period_s);
+              LabelledCut& kept = labelled_cuts.emplace_back();
+              kept.rpm = rpm;
+              kept.onset_s = onset;
+              kept.changes = changes;
+              for (const auto& change : changes) {
+                kept.end_s.push_back(labelled.samples[change.end_sample - 1].t_s);
+              }
               double cut_level = 0;
               for (const auto& change : changes) {
                 if (onset >= 0 && change.onset_level > kChatterOnsetQ) {
@@ -661,6 +751,40 @@ int main(int argc, char** argv) {
       "\nthe label's own margin, in the mill's q: the largest onset level of a stable cut %.4f, "
       "the smallest of an unstable cut's onset %.4f (threshold %.2f)\n",
       stable_level, unstable_level < HUGE_VAL ? unstable_level : 0.0, kChatterOnsetQ);
+  {
+    // How much the label's decision depends on q's last per cent: its own
+    // rule, run as a detector on the mill's q read with an error.
+    constexpr unsigned kDraws = 5;
+    int unstable_cuts = 0;
+    for (const auto& kept : labelled_cuts) unstable_cuts += kept.onset_s >= 0 ? 1 : 0;
+    std::printf(
+        "the label's own rule run as a detector on the mill's q read with a random error "
+        "(Gaussian, relative, drawn per revolution; the fewest-most over %u draws) against the "
+        "label on the exact q:\n%8s %15s %15s %15s\n",
+        kDraws, "error", "false", "detected", "within3");
+    for (const double sigma : {0.0, 0.0025, 0.01, 0.02, 0.05, 0.10}) {
+      RuleOnError lo{1 << 30, 1 << 30, 1 << 30}, hi{-1, -1, -1};
+      for (unsigned d = 0; d < (sigma > 0 ? kDraws : 1); ++d) {
+        const RuleOnError r = label_rule_on_error(labelled_cuts, sigma, d + 1);
+        lo = {std::min(lo.false_detections, r.false_detections), std::min(lo.detected, r.detected),
+              std::min(lo.within3, r.within3)};
+        hi = {std::max(hi.false_detections, r.false_detections), std::max(hi.detected, r.detected),
+              std::max(hi.within3, r.within3)};
+      }
+      char cols[3][32];
+      const int lows[3] = {lo.false_detections, lo.detected, lo.within3};
+      const int highs[3] = {hi.false_detections, hi.detected, hi.within3};
+      for (int k = 0; k < 3; ++k) {
+        if (lows[k] == highs[k]) {
+          std::snprintf(cols[k], sizeof cols[k], "%d", lows[k]);
+        } else {
+          std::snprintf(cols[k], sizeof cols[k], "%d-%d", lows[k], highs[k]);
+        }
+      }
+      std::printf("%7.2f%% %15s %11s/%-3d %15s\n", 100 * sigma, cols[0], cols[1], unstable_cuts,
+                  cols[2]);
+    }
+  }
   if (estimate && !estimate_error.empty()) {
     std::printf(
         "E's q against the mill's, comparable revolutions with the mill's q in 0.10-0.30 "

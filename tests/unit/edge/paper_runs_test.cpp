@@ -1026,3 +1026,24 @@ TEST(ChatterLabel, TheOnsetLevelIsTheLargestThresholdAtWhichARevolutionIsTheOnse
   while (onset < changes.size() && !(changes[onset].onset_level > kChatterOnsetQ)) ++onset;
   EXPECT_EQ(onset, 7u);
 }
+
+// The detector study runs the label's rule again on q read with an error
+// (mark_onsets): each run starts from no onset, so a level that a changed
+// q no longer earns does not stay behind.
+TEST(ChatterLabel, MarkingOnsetsAgainFollowsTheQItIsGiven) {
+  const std::vector<double> q{0, 0.02, 0.10, 0.149, 0.16, 0.12, 0.14, 0.20, 0.17, 0.25};
+  auto changes = vibration_change(scaled_revolutions(q, 1500, 80), 0.04);
+  ASSERT_EQ(changes.size(), q.size());
+  // Read 2 % high, revolution 3 rises past 0.15 and 4 still grows from it:
+  // the onset moves four revolutions earlier, to 3.
+  changes[3].q = 0.152;
+  mark_onsets(changes);
+  EXPECT_NEAR(changes[3].onset_level, 0.152, 1e-12);
+  // With 3 back at 0.149 and 9 read at 0.18, 9 no longer passes where 7
+  // rose to (0.20): no pause, and no onset left above kChatterOnsetQ.
+  changes[3].q = 0.149;
+  changes[9].q = 0.18;
+  mark_onsets(changes);
+  EXPECT_EQ(changes[7].onset_level, 0);
+  for (const auto& c : changes) EXPECT_LE(c.onset_level, kChatterOnsetQ);
+}

@@ -94,6 +94,11 @@ struct RevolutionChange {
 };
 inline constexpr double kChatterOnsetQ = 0.15;
 std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s);
+// Sets each revolution's onset_level from the q and comparable of the
+// revolutions around it (the rule above; vibration_change calls it). The
+// detector study runs it again on q read with an error, to measure how
+// much the label's own decision depends on q's last per cent.
+void mark_onsets(std::vector<RevolutionChange>& changes);
 
 // Writes samples.csv, revolutions.csv, events.csv, summary.json and the plots
 // (force.svg: F_Y with F_ref, pass boundaries, feed-hold and chatter marks;
