@@ -17,6 +17,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -252,11 +253,20 @@ double bench_stream(int n, double window_s, const smc::test::SecureDds& dds) {
 int main(int argc, char** argv) {
   int edges = 20, plans = 3;
   double window_s = 10;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--window-s") == 0) window_s = std::atof(argv[i + 1]);
-    if (std::strcmp(argv[i], "--edges") == 0) edges = std::atoi(argv[i + 1]);
-    if (std::strcmp(argv[i], "--plans") == 0) plans = std::atoi(argv[i + 1]);
-  }
+  CLI::App app{
+      "smc-bench-cell: SMC I planning time per job; configuration delivery to N edges and "
+      "the cell\n"
+      "service's CPU with N edges streaming, over plain DDS and under DDS Security (same run)."};
+  app.add_option("--edges", edges, "smc-edge processes on loopback")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  app.add_option("--plans", plans, "SMC I plans timed")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  app.add_option("--window-s", window_s, "seconds over which the cell's CPU is measured")
+      ->check(CLI::Range(1.0, 3600.0))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   if (std::getenv("CYCLONEDDS_URI") == nullptr) {
     ::setenv("CYCLONEDDS_URI", ("file://" + src("deploy/cyclonedds/loopback.xml")).c_str(), 1);
   }

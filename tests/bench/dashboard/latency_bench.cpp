@@ -22,6 +22,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -328,14 +329,24 @@ int main(int argc, char** argv) {
   int seconds = 10;
   int cell_clients = 2;
   int mill_clients = 2;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    const int v = std::atoi(argv[i + 1]);
-    if (a == "--mills") mills = std::clamp(v, 1, 50);
-    if (a == "--seconds") seconds = std::clamp(v, 2, 600);
-    if (a == "--cell-clients") cell_clients = std::clamp(v, 0, 50);
-    if (a == "--mill-clients") mill_clients = std::clamp(v, 0, 50);
-  }
+  CLI::App app{
+      "smc-bench-dashboard: latency from a force summary's write on DDS to its arrival at the "
+      "dashboard's\n"
+      "push-stream clients, beside DDS alone, and the dashboard's CPU; over plain DDS and "
+      "under DDS Security."};
+  app.add_option("--mills", mills, "mills streaming at 1500 rpm")
+      ->check(CLI::Range(1, 50))
+      ->capture_default_str();
+  app.add_option("--seconds", seconds, "seconds measured")
+      ->check(CLI::Range(2, 600))
+      ->capture_default_str();
+  app.add_option("--cell-clients", cell_clients, "push-stream clients on the cell's stream")
+      ->check(CLI::Range(0, 50))
+      ->capture_default_str();
+  app.add_option("--mill-clients", mill_clients, "push-stream clients on each mill's stream")
+      ->check(CLI::Range(0, 50))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   if (std::getenv("CYCLONEDDS_URI") == nullptr) {
     ::setenv("CYCLONEDDS_URI", "file://" SMC_DDS_PROFILE_PATH, 1);
   }

@@ -7,6 +7,8 @@
 //       [--fractions 0.3,0.6,0.9] [--runouts 0,10,20] [--critical-feed 0.03] [--tooth T]
 //       [--timings 0.1,0.5,0.9] [--mill-model FILE] [--seeds N] [--quick] [--verbose]
 //
+// --help lists every flag with what it does and its default.
+//
 // For each speed and width the critical depth is found by time-domain
 // simulation (smc::machining) at --critical-feed (default 0.03 mm/tooth:
 // near the feed the force controller settles at under the power limit; with
@@ -173,39 +175,51 @@ int main(int argc, char** argv) {
     std::string label;
   };
   std::vector<Timing> timings{{0.1, false, "entry"}, {0.5, false, "steady"}, {0.9, false, "exit"}};
-  for (int i = 1; i < argc; ++i) {
-    if (grid.take(argc, argv, i)) continue;
-    const bool more = i + 1 < argc;
-    if (std::strcmp(argv[i], "--critical-feed") == 0 && more) {
-      critical_feed = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--tooth") == 0 && more) {
-      tooth = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--timings") == 0 && more) {
-      timings.clear();
-      std::stringstream in(argv[++i]);
-      std::string item;
-      while (std::getline(in, item, ',')) {
-        const bool revs = !item.empty() && item.back() == 'r';
-        const double v = std::atof(item.c_str());
-        if (!(v >= 0) || (!revs && v > 1)) {
-          std::fprintf(stderr,
-                       "--timings %s: each timing is a share of the path in contact (0-1) or "
-                       "revolutions after contact with a trailing r (e.g. 0.1,0.5,2r)\n",
-                       item.c_str());
-          return 2;
-        }
-        timings.push_back({v, revs, item});
+  CLI::App app{
+      "smc-bench-breakage: module N (tool-breakage detector) under SMC II+ on the simulated "
+      "mill. Each cut\n"
+      "runs once with the intact cutter (false detections, N's margin) and once per break "
+      "timing with a\n"
+      "tooth losing its edge (delay from the break to N's detection, in revolutions). "
+      "Progress on stderr.\n"
+      "Figures: edge/README.md, \"Modules beyond Table 1\"; details: the head of "
+      "tests/bench/edge/breakage_study.cpp."};
+  grid.add_options(app);
+  app.add_option("--critical-feed", critical_feed,
+                 "mm/tooth at which the critical depths are found (near the feed the force "
+                 "controller settles at)")
+      ->check(smc::bench::kPositive)
+      ->capture_default_str();
+  app.add_option("--tooth", tooth, "the tooth that breaks")
+      ->check(smc::bench::kPositive)
+      ->capture_default_str();
+  std::string timing_list;
+  app.add_option("--timings", timing_list,
+                 "when the tooth breaks: shares of the path in contact (0-1), or revolutions "
+                 "after contact with a trailing r, comma-separated (0.1,0.5,0.9)");
+  CLI11_PARSE(app, argc, argv);
+  grid.finish(app);
+  if (!timing_list.empty()) {
+    timings.clear();
+    std::stringstream in(timing_list);
+    std::string item;
+    while (std::getline(in, item, ',')) {
+      const bool revs = !item.empty() && item.back() == 'r';
+      char* end = nullptr;
+      const double v = std::strtod(item.c_str(), &end);
+      const bool whole =
+          end != item.c_str() && (*end == '\0' || (revs && end[0] == 'r' && end[1] == '\0'));
+      if (!whole || !(v >= 0) || (!revs && v > 1)) {
+        std::fprintf(stderr,
+                     "--timings %s: each timing is a share of the path in contact (0-1) or "
+                     "revolutions after contact with a trailing r (e.g. 0.1,0.5,2r)\n",
+                     item.c_str());
+        return 2;
       }
-    } else {
-      std::fprintf(stderr,
-                   "usage: %s [--speeds LIST] [--widths LIST] [--fractions LIST] "
-                   "[--runouts LIST_UM] [--critical-feed MM] [--tooth T] [--timings LIST] "
-                   "[--mill-model FILE] [--seeds N] [--quick] [--verbose]\n",
-                   argv[0]);
-      return 2;
+      timings.push_back({v, revs, item});
     }
   }
-  if (grid.quick) grid.runouts = {0, 20};
+  if (grid.quick && app.count("--runouts") == 0) grid.runouts = {0, 20};
   const auto& speeds = grid.speeds;
   const auto& widths = grid.widths;
   const auto& fractions = grid.fractions;

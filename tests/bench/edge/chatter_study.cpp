@@ -13,6 +13,8 @@
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
 //       [--sample-period S] [--mill-model FILE] [--no-regeneration]
 //
+// --help lists every flag with what it does and its default.
+//
 // Runs the shipped SMC II configuration on the simulated mill, one pass per
 // run at 0.1 mm/tooth programmed. For each speed and width the critical depth
 // at that feed is found first by time-domain simulation (smc::machining), and
@@ -82,6 +84,7 @@
 // 0 contact, bit 1 E active). A revolution's samples are those after the
 // revolution before, up to its own t_s.
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -185,144 +188,129 @@ int main(int argc, char** argv) {
   struct Knob {
     const char* flag;
     double EdgeParameters::*field;
+    const char* what;
     double value = -1;
   };
   Knob knobs[] = {
-      {"--vibration-rise", &EdgeParameters::chatter_vibration_rise},
-      {"--vibration-climb", &EdgeParameters::chatter_vibration_climb},
-      {"--vibration-pause", &EdgeParameters::chatter_vibration_pause},
-      {"--vibration-growth", &EdgeParameters::chatter_vibration_growth},
-      {"--vibration-net", &EdgeParameters::chatter_vibration_net},
-      {"--vibration-net-growth", &EdgeParameters::chatter_vibration_net_growth},
-      {"--vibration-net-dip", &EdgeParameters::chatter_vibration_net_dip},
-      {"--vibration-jump", &EdgeParameters::chatter_vibration_jump},
-      {"--vibration-jump-growth", &EdgeParameters::chatter_vibration_jump_growth},
-      {"--vibration-jump-dip", &EdgeParameters::chatter_vibration_jump_dip},
-      {"--vibration-steep", &EdgeParameters::chatter_vibration_steep},
-      {"--vibration-steep-growth", &EdgeParameters::chatter_vibration_steep_growth},
-      {"--vibration-steep-from", &EdgeParameters::chatter_vibration_steep_from},
-      {"--vibration-confirmed", &EdgeParameters::chatter_vibration_confirmed},
-      {"--vibration-confirmed-growth", &EdgeParameters::chatter_vibration_confirmed_growth},
-      {"--vibration-level", &EdgeParameters::chatter_vibration_level},
-      {"--vibration-backup", &EdgeParameters::chatter_vibration_backup},
-      {"--vibration-noise", &EdgeParameters::vibration_sensor_noise_rms_n},
+      {"--vibration-rise", &EdgeParameters::chatter_vibration_rise, "the rise rule's level of q"},
+      {"--vibration-climb", &EdgeParameters::chatter_vibration_climb,
+       "the climb rule's level (three rises in a row)"},
+      {"--vibration-pause", &EdgeParameters::chatter_vibration_pause, "the pause rule's level"},
+      {"--vibration-growth", &EdgeParameters::chatter_vibration_growth,
+       "what a rise is: q more than this times the revolution before"},
+      {"--vibration-net", &EdgeParameters::chatter_vibration_net, "the net rule's floor"},
+      {"--vibration-net-growth", &EdgeParameters::chatter_vibration_net_growth,
+       "the net rule's growth over three revolutions"},
+      {"--vibration-net-dip", &EdgeParameters::chatter_vibration_net_dip,
+       "the net rule's largest fall on the way, a share"},
+      {"--vibration-jump", &EdgeParameters::chatter_vibration_jump, "the jump rule's level"},
+      {"--vibration-jump-growth", &EdgeParameters::chatter_vibration_jump_growth,
+       "the jump rule's jump"},
+      {"--vibration-jump-dip", &EdgeParameters::chatter_vibration_jump_dip,
+       "the jump rule's largest fall after it, a share"},
+      {"--vibration-steep", &EdgeParameters::chatter_vibration_steep, "the steep rule's level"},
+      {"--vibration-steep-growth", &EdgeParameters::chatter_vibration_steep_growth,
+       "the steep rule's growth in each of three rises"},
+      {"--vibration-steep-from", &EdgeParameters::chatter_vibration_steep_from,
+       "the least q a steep climb starts from"},
+      {"--vibration-confirmed", &EdgeParameters::chatter_vibration_confirmed,
+       "the steep climb's level where S confirms it"},
+      {"--vibration-confirmed-growth", &EdgeParameters::chatter_vibration_confirmed_growth,
+       "S's growth in each of the last two revolutions that confirms"},
+      {"--vibration-level", &EdgeParameters::chatter_vibration_level,
+       "q above this in 3 revolutions is chatter"},
+      {"--vibration-backup", &EdgeParameters::chatter_vibration_backup,
+       "S above this in 3 revolutions is chatter (the backup)"},
+      {"--vibration-noise", &EdgeParameters::vibration_sensor_noise_rms_n,
+       "the channel noise E takes out, N rms (the configuration's otherwise)"},
   };
+  CLI::App app{
+      "smc-bench-chatter-detector: module E on the simulated mill, one pass per cut at 0.1 "
+      "mm/tooth programmed\n"
+      "(the SMC II configuration). Each cut (speed x width x depth x runout x seed) runs with "
+      "E's rules off,\n"
+      "where the mill's own vibration labels it, then with E as it ships. Prints false "
+      "detections, detections\n"
+      "within 3 revolutions of the onset, the late and missed cuts, the label's margin, what "
+      "the label's own\n"
+      "rule makes of q read with an error, and E's q against the mill's. Progress on stderr. "
+      "Method:\n"
+      "edge/CHATTER.md; figures: edge/README.md; details: the head of "
+      "tests/bench/edge/chatter_study.cpp."};
+  grid.add_options(app);
+  std::string dump_path, samples_stem;
+  app.add_flag("--force-only", force_only,
+               "S alone, as on a sensor without the wideband F_y channel");
+  app.add_flag("--no-regeneration", no_regeneration,
+               "the mill cuts every chip at its nominal thickness: no cut can chatter, every "
+               "onset and detection is a false one");
+  app.add_option("--threshold", threshold_override,
+                 "S's threshold (alone; 1 or more switches E's rules off in both runs, and each "
+                 "cut runs once)")
+      ->check(smc::bench::kPositive);
+  app.add_option("--confirm", confirm_override, "S's revolutions in a row to confirm (alone)")
+      ->check(smc::bench::kPositive);
+  app.add_option("--channel-noise", channel_noise,
+                 "the dynamometer's noise on every channel, N rms, and the noise E takes out "
+                 "(the configuration's 2)")
+      ->check(smc::bench::kNonNegative);
+  app.add_option("--wide-cutoff", wide_cutoff,
+                 "the wideband F_y channel's filter, Hz, and what E is told of it (500)")
+      ->check(smc::bench::kPositive);
+  app.add_option("--wide-order", wide_order, "that filter's order, even, 2-8 (2)")
+      ->check(CLI::Range(2, 8));
+  app.add_option("--sample-period", sample_period,
+                 "the edge's sample period, s, and the channel's and the label's (0.0005)")
+      ->check(smc::bench::kPositive);
+  const EdgeParameters shipped;
+  for (Knob& k : knobs) {
+    char help[160];
+    // The channel's noise comes from the configuration, the rules from
+    // the parameters' defaults.
+    if (k.field == &EdgeParameters::vibration_sensor_noise_rms_n) {
+      std::snprintf(help, sizeof help, "%s", k.what);
+    } else {
+      std::snprintf(help, sizeof help, "%s (shipped: %g)", k.what, shipped.*k.field);
+    }
+    app.add_option(k.flag, k.value, help)->check(smc::bench::kNonNegative);
+  }
+  app.add_option("--dump", dump_path,
+                 "CSV of every revolution of the labelling runs (E's q, S, the mill's q), to try "
+                 "rules offline");
+  app.add_option("--dump-samples", samples_stem,
+                 "STEM.runs.csv, STEM.samples.bin, STEM.revs.bin: the labelling runs' samples, "
+                 "to try statistics offline");
+  CLI11_PARSE(app, argc, argv);
+  grid.finish(app);
+  if (grid.quick && app.count("--seeds") == 0) grid.seeds = 1;
   std::FILE* dump = nullptr;
   std::FILE* raw_runs = nullptr;
   std::FILE* raw_samples = nullptr;
   std::FILE* raw_revs = nullptr;
   uint64_t raw_sample_at = 0, raw_rev_at = 0;
-  // The flags, one line (the head of this file says what each does).
-  auto usage = [&](std::FILE* to) {
-    std::fprintf(to,
-                 "usage: %s [--seeds N] [--speeds LIST] [--widths LIST] [--fractions LIST] "
-                 "[--runouts LIST_UM] [--threshold X] [--confirm N] [--quick] [--verbose] "
-                 "[--dump FILE.csv] [--dump-samples STEM] [--force-only] [--vibration-rise X] "
-                 "[--vibration-climb X] [--vibration-pause X] [--vibration-growth X] "
-                 "[--vibration-net X] [--vibration-net-growth X] [--vibration-net-dip X] "
-                 "[--vibration-jump X] [--vibration-jump-growth X] [--vibration-jump-dip X] "
-                 "[--vibration-steep X] [--vibration-steep-growth X] [--vibration-steep-from X] "
-                 "[--vibration-confirmed X] [--vibration-confirmed-growth X] [--vibration-level "
-                 "X] [--vibration-backup X] [--vibration-noise N] "
-                 "[--channel-noise N] [--wide-cutoff HZ] [--wide-order N] [--sample-period S] "
-                 "[--mill-model FILE] "
-                 "[--no-regeneration]\n",
-                 argv[0]);
-  };
-  for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
-      usage(stdout);
-      std::printf(
-          "\nModule E on the simulated mill: each cut (speed x width x depth x runout x seed) "
-          "runs with E's rules\noff, where the mill's own vibration labels it, then with E as "
-          "it ships; prints false detections,\ndetections within 3 revolutions of the onset, "
-          "the late and missed cuts, the label's margin and\nE's q against the mill's.\n\n"
-          "  --seeds N            noise seeds per cut (2)\n"
-          "  --speeds LIST        rpm (750,1100,1500,2000,2500,3000); --quick: 1100,2500 at 37 mm, "
-          "one seed\n"
-          "  --widths LIST        mm (25,37,50)\n"
-          "  --fractions LIST     depths, of the critical depth at that speed, width and feed "
-          "(0.3,0.6,0.9,1.3,1.8)\n"
-          "  --runouts LIST_UM    eccentric cutter runout, um (0)\n"
-          "  --mill-model FILE    the mill cuts with this model; E and the critical depths keep "
-          "the configuration's\n"
-          "  --no-regeneration    no cut can chatter: every onset and detection is a false one\n"
-          "  --force-only         S alone (a sensor without the wideband F_y channel)\n"
-          "  --vibration-* X      E's rules' values (edge/CHATTER.md); --threshold, --confirm: "
-          "S's\n"
-          "  --channel-noise N    the dynamometer's noise, N rms (2), and the noise E takes out\n"
-          "  --wide-cutoff HZ, --wide-order N   the wideband channel's filter (500 Hz, 2nd "
-          "order)\n"
-          "  --sample-period S    the edge's sample period (0.0005)\n"
-          "  --dump FILE.csv, --dump-samples STEM   the labelling runs, to try other rules "
-          "offline\n"
-          "  --verbose            each run and its revolutions near the threshold, on stderr\n"
-          "\nThe head of tests/bench/edge/chatter_study.cpp has the details; edge/README.md "
-          "the figures.\n");
-      return 0;
-    }
-    if (grid.take(argc, argv, i)) continue;
-    const bool more = i + 1 < argc;
-    Knob* knob = nullptr;
-    for (Knob& k : knobs) {
-      if (std::strcmp(argv[i], k.flag) == 0) knob = &k;
-    }
-    if (knob != nullptr && more) {
-      knob->value = std::atof(argv[++i]);
-      continue;
-    }
-    if (std::strcmp(argv[i], "--threshold") == 0 && more) {
-      threshold_override = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--force-only") == 0) {
-      force_only = true;
-    } else if (std::strcmp(argv[i], "--no-regeneration") == 0) {
-      no_regeneration = true;
-    } else if (std::strcmp(argv[i], "--channel-noise") == 0 && more) {
-      channel_noise = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--wide-cutoff") == 0 && more) {
-      wide_cutoff = std::atof(argv[++i]);
-    } else if (std::strcmp(argv[i], "--sample-period") == 0 && more) {
-      sample_period = std::atof(argv[++i]);
-      if (!(sample_period > 0)) {
-        std::fprintf(stderr,
-                     "%s: --sample-period %s: must be a period in seconds above 0 (the "
-                     "configuration's is 0.0005)\n",
-                     argv[0], argv[i]);
-        return 2;
-      }
-    } else if (std::strcmp(argv[i], "--wide-order") == 0 && more) {
-      wide_order = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--confirm") == 0 && more) {
-      confirm_override = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--dump-samples") == 0 && more) {
-      const std::string stem = argv[++i];
-      raw_runs = std::fopen((stem + ".runs.csv").c_str(), "w");
-      raw_samples = std::fopen((stem + ".samples.bin").c_str(), "wb");
-      raw_revs = std::fopen((stem + ".revs.bin").c_str(), "wb");
-      if (raw_runs == nullptr || raw_samples == nullptr || raw_revs == nullptr) {
-        std::perror((stem + ".{runs.csv,samples.bin,revs.bin}").c_str());
-        return 2;
-      }
-      std::fprintf(raw_runs,
-                   "run,rpm,width,runout,fraction,seed,onset_s,detected_s,sample_at,samples,rev_"
-                   "at,revs\n");
-    } else if (std::strcmp(argv[i], "--dump") == 0 && more) {
-      dump = std::fopen(argv[++i], "w");
-      if (dump == nullptr) {
-        std::perror(argv[i]);
-        return 2;
-      }
-      std::fprintf(dump,
-                   "run,rpm,width,runout,fraction,seed,onset_s,t_s,statistic,vibration_ratio,"
-                   "engagement,feed_per_tooth_mm,mill_q\n");
-    } else {
-      std::fprintf(stderr, "%s: %s: %s (--help says what each flag does)\n", argv[0], argv[i],
-                   argv[i][0] == '-' ? "an unknown flag, or one without its value" : "not a flag");
-      usage(stderr);
+  if (!samples_stem.empty()) {
+    const std::string& stem = samples_stem;
+    raw_runs = std::fopen((stem + ".runs.csv").c_str(), "w");
+    raw_samples = std::fopen((stem + ".samples.bin").c_str(), "wb");
+    raw_revs = std::fopen((stem + ".revs.bin").c_str(), "wb");
+    if (raw_runs == nullptr || raw_samples == nullptr || raw_revs == nullptr) {
+      std::perror((stem + ".{runs.csv,samples.bin,revs.bin}").c_str());
       return 2;
     }
+    std::fprintf(raw_runs,
+                 "run,rpm,width,runout,fraction,seed,onset_s,detected_s,sample_at,samples,rev_"
+                 "at,revs\n");
   }
-  if (grid.quick) grid.seeds = 1;
+  if (!dump_path.empty()) {
+    dump = std::fopen(dump_path.c_str(), "w");
+    if (dump == nullptr) {
+      std::perror(dump_path.c_str());
+      return 2;
+    }
+    std::fprintf(dump,
+                 "run,rpm,width,runout,fraction,seed,onset_s,t_s,statistic,vibration_ratio,"
+                 "engagement,feed_per_tooth_mm,mill_q\n");
+  }
   const auto& speeds = grid.speeds;
   const auto& widths = grid.widths;
   const auto& fractions = grid.fractions;

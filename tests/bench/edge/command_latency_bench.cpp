@@ -14,6 +14,7 @@
 // Goals: p99 <= 20 ms in every mode, two 10 ms module periods (issue 20);
 // DDS Security adds < 1 ms to the p99 (issue 16).
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -189,19 +190,15 @@ Stats run(int commands, bool hostile, const smc::test::SecureDds& dds) {
 
 int main(int argc, char** argv) {
   int commands = 1000;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--commands" && i + 1 < argc) {
-      commands = std::atoi(argv[++i]);
-    } else {
-      std::printf(
-          "usage: smc-bench-command-latency [--commands N]\n"
-          "Feed-hold latency from an outside DDS client to the edge's situation: quiet,\n"
-          "with a hostile configuration every second, and quiet under DDS Security\n"
-          "(same run).\n");
-      return a == "--help" || a == "-h" ? 0 : 2;
-    }
-  }
+  CLI::App app{
+      "smc-bench-command-latency: feed-hold latency from an outside DDS client to the edge's "
+      "situation,\n"
+      "quiet, with a hostile configuration every second, and quiet under DDS Security (same "
+      "run)."};
+  app.add_option("--commands", commands, "feed hold on/off commands per mode")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   std::printf("feed hold on/off, %d commands per mode, smc-edge run (paced, SMC I job)\n",
               commands);
   std::printf("%-28s %8s %8s %8s %8s %6s\n", "mode", "p50 ms", "p95 ms", "p99 ms", "max ms",

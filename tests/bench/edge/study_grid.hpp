@@ -2,11 +2,11 @@
 // The grid of cuts the edge studies sweep (chatter detector, tool-breakage
 // detector), and the command-line options they share.
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -14,6 +14,24 @@
 #include "smc_config.pb.h"
 
 namespace smc::bench {
+
+// A number above 0 (kPositive) or at least 0 (kNonNegative), with a message
+// that says which (CLI11's own ranges print the largest double).
+inline CLI::Validator number_check(bool zero_allowed) {
+  return CLI::Validator(
+      [zero_allowed](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !(x == x) || x - x != 0) {
+          return "'" + text + "' is not a number";
+        }
+        if (zero_allowed ? x >= 0 : x > 0) return {};
+        return text + (zero_allowed ? " is below 0" : " is not above 0");
+      },
+      zero_allowed ? "NONNEGATIVE" : "POSITIVE");
+}
+inline const CLI::Validator kPositive = number_check(false);
+inline const CLI::Validator kNonNegative = number_check(true);
 
 struct StudyGrid {
   std::vector<double> speeds{750, 1100, 1500, 2000, 2500, 3000};  // rpm
@@ -27,43 +45,45 @@ struct StudyGrid {
   // (empty: the configuration's model).
   std::string mill_model_file;
 
-  // A comma-separated list of numbers.
-  static std::vector<double> list(const char* text) {
-    std::vector<double> out;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, ',')) out.push_back(std::atof(item.c_str()));
-    return out;
+  // The grid's options on `app`: --speeds, --widths, --fractions, --runouts
+  // (comma-separated lists), --seeds N, --quick, --verbose, --mill-model
+  // FILE. The defaults shown are the members' values when this is called.
+  void add_options(CLI::App& app) {
+    app.add_option("--speeds", speeds, "spindle speeds, rpm")
+        ->delimiter(',')
+        ->check(kPositive)
+        ->capture_default_str();
+    app.add_option("--widths", widths, "widths of cut, mm")
+        ->delimiter(',')
+        ->check(kPositive)
+        ->capture_default_str();
+    app.add_option("--fractions", fractions,
+                   "depths of cut, as fractions of the critical depth at that speed, width and "
+                   "feed")
+        ->delimiter(',')
+        ->check(kPositive)
+        ->capture_default_str();
+    app.add_option("--runouts", runouts, "eccentric cutter runouts, um")
+        ->delimiter(',')
+        ->check(kNonNegative)
+        ->capture_default_str();
+    app.add_option("--seeds", seeds, "noise seeds per cut")
+        ->check(kPositive)
+        ->capture_default_str();
+    app.add_flag("--quick", quick,
+                 "1100 and 2500 rpm at 37 mm only (unless --speeds or --widths say otherwise)");
+    app.add_flag("--verbose", verbose, "each run, on stderr");
+    app.add_option("--mill-model", mill_model_file,
+                   "the mill cuts with this MillingModel (text format, e.g. "
+                   "cell/models/paper_face_mill_mismatched.textproto) and the study's cutter "
+                   "and part; the critical depths keep the configuration's model");
   }
 
-  // Takes argv[i] (and its value) when it is one of the grid's options:
-  // --speeds, --widths, --fractions, --runouts (lists), --seeds N, --quick,
-  // --verbose, --mill-model FILE. Returns false for any other argument.
-  bool take(int argc, char** argv, int& i) {
-    const bool more = i + 1 < argc;
-    const char* a = argv[i];
-    if (std::strcmp(a, "--seeds") == 0 && more) {
-      seeds = std::atoi(argv[++i]);
-    } else if (std::strcmp(a, "--speeds") == 0 && more) {
-      speeds = list(argv[++i]);
-    } else if (std::strcmp(a, "--widths") == 0 && more) {
-      widths = list(argv[++i]);
-    } else if (std::strcmp(a, "--fractions") == 0 && more) {
-      fractions = list(argv[++i]);
-    } else if (std::strcmp(a, "--runouts") == 0 && more) {
-      runouts = list(argv[++i]);
-    } else if (std::strcmp(a, "--mill-model") == 0 && more) {
-      mill_model_file = argv[++i];
-    } else if (std::strcmp(a, "--verbose") == 0) {
-      verbose = true;
-    } else if (std::strcmp(a, "--quick") == 0) {
-      quick = true;
-      speeds = {1100, 2500};
-      widths = {37};
-    } else {
-      return false;
-    }
-    return true;
+  // After parsing: --quick's speeds and widths, where not given.
+  void finish(const CLI::App& app) {
+    if (!quick) return;
+    if (app.count("--speeds") == 0) speeds = {1100, 2500};
+    if (app.count("--widths") == 0) widths = {37};
   }
 
   // Loads --mill-model's file into `plant` (nothing without one). False,

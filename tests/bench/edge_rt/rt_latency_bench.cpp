@@ -12,7 +12,7 @@
 // latency truncated to whole µs as cyclictest does). Like cyclictest, the
 // bench holds /dev/cpu_dma_latency at 0 during the RtLoop run, when it can.
 //
-// Exit status: 0 when both measurements ran, 2 on a usage error or when
+// Exit status: 0 when both measurements ran, CLI11's on a usage error, 2 when
 // cyclictest is missing or its output cannot be read.
 
 #include <fcntl.h>
@@ -20,6 +20,7 @@
 #include <sched.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -48,43 +49,6 @@ struct Args {
   int cpu = -2;  // -2: pick the last allowed CPU; -1: no pinning
   bool cyclictest = true;
 };
-
-void usage() {
-  std::fprintf(stderr,
-               "usage: smc-bench-rt-latency [--seconds N] [--load] [--period-us US]\n"
-               "                            [--priority P] [--cpu N|-1] [--no-cyclictest]\n");
-}
-
-std::optional<Args> parse(int argc, char** argv) {
-  Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&](int& out) {
-      if (i + 1 >= argc) return false;
-      char* end = nullptr;
-      const long v = std::strtol(argv[++i], &end, 10);
-      if (end == nullptr || *end != '\0') return false;
-      out = static_cast<int>(v);
-      return true;
-    };
-    if (arg == "--load") {
-      a.load = true;
-    } else if (arg == "--no-cyclictest") {
-      a.cyclictest = false;
-    } else if (arg == "--seconds") {
-      if (!value(a.seconds) || a.seconds < 1) return std::nullopt;
-    } else if (arg == "--period-us") {
-      if (!value(a.period_us) || a.period_us < 50) return std::nullopt;
-    } else if (arg == "--priority") {
-      if (!value(a.priority)) return std::nullopt;
-    } else if (arg == "--cpu") {
-      if (!value(a.cpu) || a.cpu < -1) return std::nullopt;
-    } else {
-      return std::nullopt;
-    }
-  }
-  return a;
-}
 
 // CPUs this process may run on, lowest first.
 std::string allowed_cpus(int& first, int& last, int& count) {
@@ -310,12 +274,27 @@ void print_ratio(Nanos ours, Nanos theirs, const char* what) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::optional<Args> parsed = parse(argc, argv);
-  if (!parsed) {
-    usage();
-    return 2;
-  }
-  const Args a = *parsed;
+  Args a;
+  CLI::App app{
+      "smc-bench-rt-latency: wake-up latency of the edge's real-time loop on the wall clock "
+      "beside\n"
+      "cyclictest at the same period, duration, priority, CPU and memory locking (same run)."};
+  app.add_option("--seconds", a.seconds, "seconds each measurement runs")
+      ->check(CLI::Range(1, 86400))
+      ->capture_default_str();
+  app.add_flag("--load", a.load, "a busy thread on another CPU during both");
+  app.add_option("--period-us", a.period_us, "the loop's period, us")
+      ->check(CLI::Range(50, 1000000))
+      ->capture_default_str();
+  app.add_option("--priority", a.priority, "SCHED_FIFO priority")
+      ->check(CLI::Range(1, 99))
+      ->capture_default_str();
+  app.add_option("--cpu", a.cpu, "CPU to pin to, -1: none (default: the last allowed)")
+      ->check(CLI::Range(-1, 4095));
+  bool no_cyclictest = false;
+  app.add_flag("--no-cyclictest", no_cyclictest, "the loop alone");
+  CLI11_PARSE(app, argc, argv);
+  a.cyclictest = !no_cyclictest;
 
   int first = -1;
   int last = -1;

@@ -11,6 +11,7 @@
 // ddsperf prints half the round-trip time; this program doubles it so that
 // both columns are full round trips.
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -158,10 +159,19 @@ std::optional<Percentiles> measure_ddsperf(int seconds, int payload) {
 int main(int argc, char** argv) {
   size_t samples = 20000;
   int ddsperf_s = 6;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::strcmp(argv[i], "--samples") == 0) samples = std::strtoul(argv[i + 1], nullptr, 10);
-    if (std::strcmp(argv[i], "--ddsperf-s") == 0) ddsperf_s = std::atoi(argv[i + 1]);
-  }
+  CLI::App app{
+      "smc-bench-transport-latency: ForceSummary round trip through smc_transport between "
+      "two processes\n"
+      "on loopback beside ddsperf ping/pong, then an OperatorCommand's round trip over plain "
+      "DDS and\n"
+      "under DDS Security (same run)."};
+  app.add_option("--samples", samples, "round trips measured")
+      ->check(CLI::Range(size_t{1}, size_t{100000000}))
+      ->capture_default_str();
+  app.add_option("--ddsperf-s", ddsperf_s, "seconds of ddsperf ping/pong")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   if (std::getenv("CYCLONEDDS_URI") == nullptr) {
     // ddsperf must use the loopback profile too.
     ::setenv("CYCLONEDDS_URI", (std::string("file://") + SMC_DDS_PROFILE_PATH).c_str(), 1);
