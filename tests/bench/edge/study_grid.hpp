@@ -3,9 +3,9 @@
 // detector), and the command-line options they share.
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <exception>
 #include <string>
 #include <vector>
@@ -22,7 +22,7 @@ inline CLI::Validator number_check(bool zero_allowed) {
       [zero_allowed](std::string& text) -> std::string {
         char* end = nullptr;
         const double x = std::strtod(text.c_str(), &end);
-        if (end == text.c_str() || *end != '\0' || !(x == x) || x - x != 0) {
+        if (end == text.c_str() || *end != '\0' || !std::isfinite(x)) {
           return "'" + text + "' is not a number";
         }
         if (zero_allowed ? x >= 0 : x > 0) return {};
