@@ -15,14 +15,16 @@ import { join } from 'node:path';
 
 import { startCell } from '../../browser/cell.mjs';
 import { CHROMIUM_ARGS, Proc, stopAll } from '../../browser/processes.mjs';
+import { benchArgs } from './args.mjs';
 
-const args = process.argv.slice(2);
-const opt = (name, dflt) => {
-  const i = args.indexOf(name);
-  return i >= 0 ? Number(args[i + 1]) : dflt;
-};
-const MILLS = opt('--mills', 10);
-const SECONDS = opt('--seconds', 20);
+const { mills: MILLS, seconds: SECONDS } = benchArgs(
+  'smc-bench-dashboard-browser',
+  "Latency from a force summary's write on DDS to its arrival in the page (headless Chromium),\n" +
+    'with the CPU of smc-dashboard and of the publisher.',
+  {
+    mills: { what: 'mills streaming', dflt: 10, min: 1, max: 50 },
+    seconds: { what: 'seconds measured', dflt: 20, min: 2, max: 600 },
+  });
 const BIN = process.env.SMC_BIN_DIR;
 const require = createRequire(join(process.env.SMC_NODE_MODULES, 'x.js'));
 const { chromium } = require('playwright-core');

@@ -14,10 +14,12 @@ import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
 import { CHROMIUM_ARGS, Proc, stopAll } from '../../browser/processes.mjs';
+import { benchArgs } from './args.mjs';
 
-const args = process.argv.slice(2);
-const i = args.indexOf('--runs');
-const RUNS = i >= 0 ? Number(args[i + 1]) : 10;
+const { runs: RUNS } = benchArgs(
+  'smc-bench-job-page',
+  "How long a finished job's history page takes to load in headless Chromium.",
+  { runs: { what: 'page loads timed', dflt: 10, min: 1, max: 1000 } });
 const BIN = process.env.SMC_BIN_DIR;
 const require = createRequire(join(process.env.SMC_NODE_MODULES, 'x.js'));
 const { chromium } = require('playwright-core');
