@@ -5,6 +5,11 @@
 #   deploy/check-format.sh          check; list the files that differ
 #   deploy/check-format.sh --fix    format them in place
 set -euo pipefail
+case "${1:-}" in
+  "" | --fix) ;;
+  -h | --help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+  *) echo "check-format: unknown option '$1' (see --help)" >&2; exit 2 ;;
+esac
 cd "$(dirname "$0")/.."
 command -v clang-format >/dev/null || { echo "check-format: clang-format not found; run deploy/setup.sh" >&2; exit 1; }
 mapfile -t files < <(git ls-files '*.c' '*.h' '*.cpp' '*.hpp')

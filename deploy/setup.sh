@@ -6,6 +6,11 @@
 #   deploy/setup.sh            build + test + demo dependencies
 #   deploy/setup.sh --print    list the packages and exit
 set -euo pipefail
+case "${1:-}" in
+  "" | --print) ;;
+  -h | --help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+  *) echo "setup: unknown option '$1' (see --help)" >&2; exit 2 ;;
+esac
 
 packages=(
   # toolchain

@@ -8,6 +8,7 @@
 # Every DDS participant in the tests uses deploy/cyclonedds/loopback.xml
 # (interface lo, no multicast): no test traffic leaves the machine.
 set -euo pipefail
+case "${1:-}" in -h | --help) sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;; esac
 cd "$(dirname "$0")/.."
 
 deploy/setup.sh

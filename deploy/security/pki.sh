@@ -30,8 +30,9 @@
 # with SMC_DDS_SECURITY=DIR/NAME/security.xml).
 set -euo pipefail
 
-usage() { sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 2; }
-[[ $# -ge 2 ]] || usage
+usage() { sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit "${1:-2}"; }
+case "${1:-}" in -h | --help) usage 0 ;; esac
+[[ $# -ge 2 ]] || usage 2
 cmd=$1
 dir=$(realpath -m "$2")
 shift 2
