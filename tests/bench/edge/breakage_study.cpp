@@ -184,7 +184,7 @@ int main(int argc, char** argv) {
       "Progress on stderr.\n"
       "Figures: edge/README.md, \"Modules beyond Table 1\"; details: the head of "
       "tests/bench/edge/breakage_study.cpp."};
-  grid.add_options(app);
+  grid.add_options(app, ", runouts 0 and 20 um");
   app.add_option("--critical-feed", critical_feed,
                  "mm/tooth at which the critical depths are found (near the feed the force "
                  "controller settles at)")

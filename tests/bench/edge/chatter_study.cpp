@@ -235,7 +235,7 @@ int main(int argc, char** argv) {
       "Method:\n"
       "edge/CHATTER.md; figures: edge/README.md; details: the head of "
       "tests/bench/edge/chatter_study.cpp."};
-  grid.add_options(app);
+  grid.add_options(app, ", one seed");
   std::string dump_path, samples_stem;
   app.add_flag("--force-only", force_only,
                "S alone, as on a sensor without the wideband F_y channel");

@@ -47,8 +47,9 @@ struct StudyGrid {
 
   // The grid's options on `app`: --speeds, --widths, --fractions, --runouts
   // (comma-separated lists), --seeds N, --quick, --verbose, --mill-model
-  // FILE. The defaults shown are the members' values when this is called.
-  void add_options(CLI::App& app) {
+  // FILE. The defaults shown are the members' values when this is called;
+  // `quick_also` says what else the study's --quick does.
+  void add_options(CLI::App& app, const std::string& quick_also) {
     app.add_option("--speeds", speeds, "spindle speeds, rpm")
         ->delimiter(',')
         ->check(kPositive)
@@ -71,7 +72,8 @@ struct StudyGrid {
         ->check(kPositive)
         ->capture_default_str();
     app.add_flag("--quick", quick,
-                 "1100 and 2500 rpm at 37 mm only (unless --speeds or --widths say otherwise)");
+                 "1100 and 2500 rpm at 37 mm only" + quick_also +
+                     " (unless the flags for those are given too)");
     app.add_flag("--verbose", verbose, "each run, on stderr");
     app.add_option("--mill-model", mill_model_file,
                    "the mill cuts with this MillingModel (text format, e.g. "
