@@ -215,6 +215,10 @@ Figure& Figure::set_title(std::string title) {
   title_ = std::move(title);
   return *this;
 }
+Figure& Figure::set_subtitle(std::string subtitle) {
+  subtitle_ = std::move(subtitle);
+  return *this;
+}
 Figure& Figure::set_size(int width_px, int height_px) {
   width_ = std::max(width_px, 200);
   height_ = std::max(height_px, 150);
@@ -283,7 +287,8 @@ std::string Figure::svg() const {
   resolve(x_, xr, 0.0, x_lo, x_hi);
   resolve(y_, yr, 0.05, y_lo, y_hi);
 
-  const double left = 72, right = 24, top = title_.empty() ? 20 : 40, bottom = 56;
+  const double left = 72, right = 24, bottom = 56;
+  const double top = (title_.empty() ? 20 : 40) + (subtitle_.empty() ? 0 : 18);
   const double pw = width_ - left - right;
   const double ph = height_ - top - bottom;
   const auto px = [&](double x) { return left + (x - x_lo) / (x_hi - x_lo) * pw; };
@@ -299,6 +304,11 @@ std::string Figure::svg() const {
   if (!title_.empty()) {
     o << "<text x=\"" << num(width_ / 2.0) << "\" y=\"24\" text-anchor=\"middle\" font-size=\"15\">"
       << escape(title_) << "</text>\n";
+  }
+  if (!subtitle_.empty()) {
+    o << "<text x=\"" << num(width_ / 2.0) << "\" y=\"" << (title_.empty() ? 24 : 44)
+      << "\" text-anchor=\"middle\" font-size=\"12\" fill=\"#555555\">" << escape(subtitle_)
+      << "</text>\n";
   }
 
   // Grid and ticks.

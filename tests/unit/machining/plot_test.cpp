@@ -79,6 +79,18 @@ TEST(SvgPlot, WritesSeriesLegendReferencesAndEscapedText) {
   EXPECT_THROW(fig.write("/nonexistent/dir/plot.svg"), std::runtime_error);
 }
 
+TEST(SvgPlot, ASubtitleSitsUnderTheTitleAndThePlotMovesDown) {
+  smc::plot::Figure fig("E's delay");
+  fig.add_scatter("cuts", {1.0, 2.0}, {3.0, 4.0});
+  const std::string without = fig.svg();
+  EXPECT_NE(without.find("<rect x=\"72.00\" y=\"40.00\""), std::string::npos);
+  fig.set_subtitle("2 seeds, runouts 0 & 20 um");
+  const std::string with = fig.svg();
+  EXPECT_NE(with.find("fill=\"#555555\">2 seeds, runouts 0 &amp; 20 um</text>"), std::string::npos);
+  // The plot area starts a line lower, under the subtitle.
+  EXPECT_NE(with.find("<rect x=\"72.00\" y=\"58.00\""), std::string::npos);
+}
+
 TEST(SvgPlot, ThinsLongLinesButKeepsTheirPeaks) {
   smc::plot::Figure fig;
   fig.set_size(400, 300).set_max_points_per_series(200);

@@ -1,8 +1,8 @@
 #pragma once
 // A small SVG plot writer: line and scatter series on linear axes, with
-// ticks, axis labels, a title, a legend, vertical marker lines and horizontal
-// reference lines, each optionally labelled. Self-contained (no
-// dependencies), deterministic output, text escaped.
+// ticks, axis labels, a title (and a subtitle under it), a legend, vertical marker lines and
+// horizontal reference lines, each optionally labelled. Self-contained (no dependencies),
+// deterministic output, text escaped.
 //
 //   smc::plot::Figure fig("F_Y with SMC I");
 //   fig.x_axis().label = "time (s)";
@@ -64,6 +64,8 @@ class Figure {
   explicit Figure(std::string title = {});
 
   Figure& set_title(std::string title);
+  // A second line under the title, smaller and grey: what was run, say.
+  Figure& set_subtitle(std::string subtitle);
   Figure& set_size(int width_px, int height_px);
   Figure& set_legend(LegendPosition position);
   Figure& set_max_points_per_series(std::size_t n);
@@ -82,7 +84,7 @@ class Figure {
   void write(const std::filesystem::path& file) const;
 
  private:
-  std::string title_;
+  std::string title_, subtitle_;
   int width_ = 800;
   int height_ = 480;
   LegendPosition legend_ = LegendPosition::top_right;
