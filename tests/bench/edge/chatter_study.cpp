@@ -3,7 +3,7 @@
 //
 //   build/release/bin/smc-bench-chatter-detector [--seeds N] [--speeds 750,1100,...]
 //       [--widths 25,37,50] [--fractions 0.3,0.6,0.9,1.3,1.8] [--runouts 0,10,20]
-//       [--quick] [--verbose] [--dump FILE.csv] [--dump-samples STEM]
+//       [--quick] [--verbose] [--plot DIR] [--dump FILE.csv] [--dump-samples STEM]
 //       [--force-only] [--vibration-rise X] [--vibration-climb X] [--vibration-pause X]
 //       [--vibration-growth X] [--vibration-net X] [--vibration-net-growth X]
 //       [--vibration-net-dip X] [--vibration-jump X] [--vibration-jump-growth X]
@@ -56,8 +56,9 @@
 // false one. After the tables: the unstable
 // cuts E caught late or missed, each with the mill's own q around its onset
 // (how long it stayed above the onset's threshold, and how high it went
-// after); the label's
-// own margin (the largest onset level of a stable cut and the smallest of
+// after); the unstable cuts E detected before the label's onset (counted
+// within 3 revolutions), each with the mill's own q around E's detection;
+// the label's own margin (the largest onset level of a stable cut and the smallest of
 // an unstable cut's onset, in the mill's q: smc/edge/runner.hpp,
 // vibration_change); the label's own rule run as a detector on the mill's
 // q read with a relative error of 0-10 % drawn per revolution (5 draws
@@ -66,7 +67,9 @@
 // comparable revolutions with the mill's q in 0.10-0.30, by speed; then
 // E's q where the mill's is below 0.02 (a cut that repeats itself, before
 // any onset), by speed: what the channel's noise alone makes of q there
-// (--channel-noise 0 shows it without). Progress goes to stderr. --dump writes
+// (--channel-noise 0 shows it without). --plot DIR draws the delays, the
+// label's margin, E's q against the mill's and the label's rule on q with an
+// error into DIR (chatter_plots.hpp). Progress goes to stderr. --dump writes
 // every revolution of the labelling run (E's rules off) that E judged or
 // skipped in contact (statistic, q, engagement, feed, and the mill's own q
 // on the trace's revolution that ends there, -1 where it is not
@@ -89,11 +92,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <limits>
 #include <map>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "chatter_plots.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/edge/core.hpp"
 #include "smc/edge/runner.hpp"
@@ -124,6 +130,32 @@ struct LateCut {
   std::vector<double> q;   // the mill's q from the revolution before the onset, up to 6
   int above = 0;           // revolutions from the onset on with q above the onset's 0.15
   double later_most = -1;  // the largest q after those, to the end of the pass (-1: none)
+};
+
+// q values in columns, "-" for one that is not comparable (< 0).
+std::string q_list(const std::vector<double>& qs) {
+  std::string out;
+  char one[16];
+  for (const double q : qs) {
+    if (q < 0) {
+      std::snprintf(one, sizeof one, "%6s ", "-");
+    } else {
+      std::snprintf(one, sizeof one, "%6.3f ", q);
+    }
+    out += one;
+  }
+  return out;
+}
+
+// An unstable cut E detected before the label's onset, with the mill's own
+// q (the labelling run's) from three revolutions before E's detection to
+// the one after: was the cut already changing when E decided?
+struct EarlyCut {
+  double rpm = 0, width = 0, runout = 0, fraction = 0;
+  int seed = 0;
+  double delay_revs = 0;  // < 0
+  std::vector<double> q;
+  double most_before_onset = 0;  // the mill's largest q from E's detection to the onset
 };
 
 // A cut's labelling run, revolution by revolution (the mill's own q), kept
@@ -236,7 +268,7 @@ int main(int argc, char** argv) {
       "edge/CHATTER.md; figures: edge/README.md; details: the head of "
       "tests/bench/edge/chatter_study.cpp."};
   grid.add_options(app, ", one seed");
-  std::string dump_path, samples_stem;
+  std::string dump_path, samples_stem, plot_dir;
   app.add_flag("--force-only", force_only,
                "S alone, as on a sensor without the wideband F_y channel");
   app.add_flag("--no-regeneration", no_regeneration,
@@ -278,9 +310,22 @@ int main(int argc, char** argv) {
   app.add_option("--dump-samples", samples_stem,
                  "STEM.runs.csv, STEM.samples.bin, STEM.revs.bin: the labelling runs' samples, "
                  "to try statistics offline");
+  app.add_option("--plot", plot_dir,
+                 "write the study's figures into this directory: chatter-delay.svg, "
+                 "chatter-margin.svg, chatter-estimate.svg, chatter-error.svg");
   CLI11_PARSE(app, argc, argv);
   grid.finish(app);
   if (grid.quick && app.count("--seeds") == 0) grid.seeds = 1;
+  if (!plot_dir.empty()) {
+    // Before the study's minutes, not after them.
+    std::error_code ec;
+    std::filesystem::create_directories(plot_dir, ec);
+    if (ec) {
+      std::fprintf(stderr, "--plot: %s: cannot create the directory: %s\n", plot_dir.c_str(),
+                   ec.message().c_str());
+      return 2;
+    }
+  }
   std::FILE* dump = nullptr;
   std::FILE* raw_runs = nullptr;
   std::FILE* raw_samples = nullptr;
@@ -436,6 +481,7 @@ int main(int argc, char** argv) {
   // the revolutions near the threshold, by speed.
   double stable_level = 0, unstable_level = HUGE_VAL;
   std::vector<LateCut> late;
+  std::vector<EarlyCut> early;
   std::map<double, std::vector<double>> estimate_error;  // rpm -> q_E / q
   // E's q where the mill's is below kStillQ (a cut that repeats itself):
   // what the channel's noise alone makes of it, by speed.
@@ -443,6 +489,7 @@ int main(int argc, char** argv) {
   std::map<double, std::vector<double>> still;  // rpm -> q_E
   std::vector<double> mill_q;                   // per labelled revolution
   std::vector<LabelledCut> labelled_cuts;
+  smc::bench::ChatterStudyFigures figures;  // --plot's
   const double still_period_s = base.operation().slow_period_s();
   for (double rpm : speeds) {
     for (double width : widths) {
@@ -515,12 +562,42 @@ int main(int argc, char** argv) {
                 }
                 cut_level = std::max(cut_level, change.onset_level);
               }
+              {
+                auto& fc = figures.cuts.emplace_back();
+                fc.rpm = rpm;
+                fc.width = width;
+                fc.runout = runout;
+                fc.unstable = onset >= 0;
+                fc.detected = first_detection >= 0;
+                fc.delay_revs = fc.detected ? (first_detection - onset) * rpm / 60.0
+                                            : std::numeric_limits<double>::quiet_NaN();
+                fc.level = cut_level;
+              }
               if (onset < 0) {
                 stable_level = std::max(stable_level, cut_level);
               } else {
                 unstable_level = std::min(unstable_level, cut_level);
                 const double delay =
                     first_detection >= 0 ? (first_detection - onset) * rpm / 60.0 : -1;
+                if (first_detection >= 0 && delay < 0) {
+                  EarlyCut ec{rpm, width, runout, fraction, seed, delay, {}, 0};
+                  // The revolution that ends where E decided (or the last before).
+                  size_t at = 0;
+                  while (at + 1 < changes.size() &&
+                         labelled.samples[changes[at + 1].end_sample - 1].t_s <=
+                             first_detection + 1e-9) {
+                    ++at;
+                  }
+                  for (size_t r = at >= 3 ? at - 3 : 0; r < changes.size() && r <= at + 1; ++r) {
+                    ec.q.push_back(changes[r].comparable ? changes[r].q : -1);
+                  }
+                  for (size_t r = at; r < changes.size(); ++r) {
+                    if (labelled.samples[changes[r].end_sample - 1].t_s > onset + 1e-9) break;
+                    if (changes[r].comparable)
+                      ec.most_before_onset = std::max(ec.most_before_onset, changes[r].q);
+                  }
+                  early.push_back(ec);
+                }
                 if (delay < 0 ? first_detection < 0 : delay > 3.0) {
                   LateCut lc{rpm, width, runout, fraction, seed, delay, {}, 0, -1};
                   size_t at = 0;
@@ -562,6 +639,9 @@ int main(int argc, char** argv) {
                   continue;
                 }
                 mill_q[i] = change.q;
+                if (!plot_dir.empty() && r.chatter_vibration_ratio > 0) {
+                  figures.q_pairs.push_back({rpm, change.q, r.chatter_vibration_ratio});
+                }
                 if (r.chatter_vibration_ratio > 0 && change.q >= 0.1 && change.q <= 0.3) {
                   estimate_error[rpm].push_back(r.chatter_vibration_ratio / change.q);
                 }
@@ -706,16 +786,7 @@ int main(int argc, char** argv) {
         kChatterOnsetQ, "rpm", "width", "runout", "fraction", "seed", "delay", "mill's q", "above",
         "later");
     for (const auto& lc : late) {
-      std::string qs;
-      char one[16];
-      for (const double q : lc.q) {
-        if (q < 0) {
-          std::snprintf(one, sizeof one, "%6s ", "-");
-        } else {
-          std::snprintf(one, sizeof one, "%6.3f ", q);
-        }
-        qs += one;
-      }
+      const std::string qs = q_list(lc.q);
       char delay[16];
       if (lc.delay_revs < 0) {
         std::snprintf(delay, sizeof delay, "%s", "missed");
@@ -731,6 +802,19 @@ int main(int argc, char** argv) {
       }
       std::printf("%6.0f %6.0f %6.0f %8.2f %4d %7s  %-47s %5d %6s\n", lc.rpm, lc.width, lc.runout,
                   lc.fraction, lc.seed, delay, qs.c_str(), lc.above, later);
+    }
+  }
+  if (!early.empty()) {
+    std::printf(
+        "\nunstable cuts E detected before the label's onset (counted within 3 revolutions): "
+        "the mill's own q from three revolutions before E's detection to the one after (the "
+        "fourth is E's; - not comparable), and its largest q from there to the onset\n%6s %6s "
+        "%6s %8s %4s %7s  %-35s %8s\n",
+        "rpm", "width", "runout", "fraction", "seed", "delay", "mill's q", "most");
+    for (const auto& ec : early) {
+      const std::string qs = q_list(ec.q);
+      std::printf("%6.0f %6.0f %6.0f %8.2f %4d %7.0f  %-35s %8.3f\n", ec.rpm, ec.width, ec.runout,
+                  ec.fraction, ec.seed, ec.delay_revs, qs.c_str(), ec.most_before_onset);
     }
   }
   std::printf(
@@ -750,13 +834,23 @@ int main(int argc, char** argv) {
         kDraws, "error", "false", "detected", "within3");
     for (const double sigma : {0.0, 0.0025, 0.01, 0.02, 0.05, 0.10}) {
       RuleOnError lo{1 << 30, 1 << 30, 1 << 30}, hi{-1, -1, -1};
-      for (unsigned d = 0; d < (sigma > 0 ? kDraws : 1); ++d) {
+      smc::bench::ChatterStudyFigures::ErrorRow row;
+      row.sigma = sigma;
+      const unsigned draws = sigma > 0 ? kDraws : 1;
+      for (unsigned d = 0; d < draws; ++d) {
         const RuleOnError r = label_rule_on_error(labelled_cuts, sigma, d + 1);
+        row.false_mean += static_cast<double>(r.false_detections) / draws;
+        row.late_mean += static_cast<double>(unstable_cuts - r.within3) / draws;
         lo = {std::min(lo.false_detections, r.false_detections), std::min(lo.detected, r.detected),
               std::min(lo.within3, r.within3)};
         hi = {std::max(hi.false_detections, r.false_detections), std::max(hi.detected, r.detected),
               std::max(hi.within3, r.within3)};
       }
+      row.false_lo = lo.false_detections;
+      row.false_hi = hi.false_detections;
+      row.late_lo = unstable_cuts - hi.within3;
+      row.late_hi = unstable_cuts - lo.within3;
+      figures.error_rows.push_back(row);
       char cols[3][32];
       const int lows[3] = {lo.false_detections, lo.detected, lo.within3};
       const int highs[3] = {hi.false_detections, hi.detected, hi.within3};
@@ -797,6 +891,28 @@ int main(int argc, char** argv) {
       };
       std::printf("%6.0f %9zu %9td %9td %8.3f\n", speed, e.size(), above(0.10), above(0.15),
                   *std::max_element(e.begin(), e.end()));
+    }
+  }
+  if (!plot_dir.empty()) {
+    figures.unstable = all.unstable_runs;
+    figures.e_false = all.false_detections;
+    figures.e_late = all.unstable_runs - all.within3;
+    figures.onset_q = kChatterOnsetQ;
+    char what[200];
+    std::snprintf(what, sizeof what, "%s, %d seed%s, runouts %s um, depths %s x critical",
+                  mill_model_file.empty() ? "the configuration's mill" : mill_model_file.c_str(),
+                  seeds, seeds == 1 ? "" : "s", smc::bench::joined(runouts).c_str(),
+                  smc::bench::joined(fractions).c_str());
+    figures.subtitle = what;
+    try {
+      std::string written;
+      for (const auto& path : smc::bench::write_chatter_figures(plot_dir, figures)) {
+        written += " " + path.string();
+      }
+      std::printf("\nfigures:%s\n", written.c_str());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "--plot: %s\n", e.what());
+      return 2;
     }
   }
   if (dump != nullptr) std::fclose(dump);
