@@ -69,8 +69,11 @@ std::filesystem::path delay_figure(const std::filesystem::path& dir, const Chatt
   const Spread sp = spread_of(f.cuts);
   int within = 0, detected = 0;
   std::map<double, Series> by_runout;
-  Series later, missed;
-  later.style = missed.style = Style::markers;
+  Series later, missed, premature;
+  later.style = missed.style = premature.style = Style::markers;
+  premature.marker = Marker::cross;
+  premature.color = "#000000";
+  premature.marker_size = 5;
   later.marker = Marker::triangle;
   missed.marker = Marker::cross;
   later.color = "#555555";
@@ -79,6 +82,12 @@ std::filesystem::path delay_figure(const std::filesystem::path& dir, const Chatt
   for (const auto& c : f.cuts) {
     if (!c.unstable) continue;
     const double x = sp.x(c.rpm, c.width, c.runout);
+    if (c.premature) {
+      premature.x.push_back(x);
+      premature.y.push_back(c.delay_revs);
+      lowest = std::min(lowest, c.delay_revs);
+      continue;
+    }
     if (!c.detected) {
       missed.x.push_back(x);
       missed.y.push_back(kShown + 1.4);
@@ -130,9 +139,25 @@ std::filesystem::path delay_figure(const std::filesystem::path& dir, const Chatt
   missed.label = label;
   if (!later.x.empty()) fig.add(std::move(later));
   if (!missed.x.empty()) fig.add(std::move(missed));
+  std::snprintf(label, sizeof label, "before the onset, the mill's q below it: false (%zu)",
+                premature.x.size());
+  premature.label = label;
+  if (!premature.x.empty()) fig.add(std::move(premature));
   fig.add_horizontal(3.0, "the goal: 3 revolutions");
   if (lowest < 0) fig.add_horizontal(0.0, "the label's onset (below: E decided before it)");
-  fig.set_legend(plot::LegendPosition::bottom_right);
+  // The legend in the bottom corner with fewer cuts under it (the top has
+  // the late and missed ones).
+  const double y_lo = std::floor(lowest), y_box = y_lo + 0.35 * (kShown + 2 - y_lo);
+  const double x_left = sp.lo + 0.45 * (sp.hi - sp.lo), x_right = sp.hi - 0.45 * (sp.hi - sp.lo);
+  int left = 0, right = 0;
+  for (const auto& c : f.cuts) {
+    if (!c.unstable || !(c.delay_revs < y_box)) continue;
+    const double x = sp.x(c.rpm, c.width, c.runout);
+    left += x < x_left ? 1 : 0;
+    right += x > x_right ? 1 : 0;
+  }
+  fig.set_legend(left < right ? plot::LegendPosition::bottom_left
+                              : plot::LegendPosition::bottom_right);
   return written(fig, dir / "chatter-delay.svg");
 }
 

@@ -27,6 +27,9 @@ struct ChatterStudyFigures {
     // before it), NaN when E missed it. Stable: unused.
     double delay_revs = 0;
     bool detected = false;
+    // Unstable: E decided before the onset where the mill's q had not
+    // reached it, a false detection (not detected).
+    bool premature = false;
     // The mill's q: a stable cut's largest onset level, an unstable cut's
     // onset level (smc/edge/runner.hpp, vibration_change).
     double level = 0;
@@ -47,7 +50,10 @@ struct ChatterStudyFigures {
   std::vector<Cut> cuts;
   std::vector<QPair> q_pairs;
   std::vector<ErrorRow> error_rows;
-  int e_false = 0, e_late = 0, unstable = 0;  // E's own figures
+  // E's own figures: its false detections (in stable cuts and before an
+  // unstable cut's onset), unstable cuts not within 3 revolutions, all
+  // unstable cuts.
+  int e_false = 0, e_late = 0, unstable = 0;
 };
 
 // "0.3, 0.6, 0.9" and the unit after it, for titles and labels.

@@ -48,8 +48,13 @@ ChatterStudyFigures study() {
   cut(2500, 25, 0, true, NAN, 0.155);   // missed
   cut(1500, 50, 0, false, 0, 0.149);
   cut(2500, 37, 10, false, 0, 0.05);  // below the margin plot's range
-  f.unstable = 4;
-  f.e_false = 0;
+  // Decided 41 revolutions before the onset, where the mill's q had not
+  // reached it: a false detection, neither detected nor missed.
+  cut(2000, 50, 10, true, -41.0, 0.152);
+  f.cuts.back().premature = true;
+  f.cuts.back().detected = false;
+  f.unstable = 5;
+  f.e_false = 1;
   f.e_late = 3;
   for (int i = 0; i < 4000; ++i) {
     const double q = 0.05 + 0.3 * i / 4000.0;
@@ -75,11 +80,14 @@ TEST(ChatterStudyFigures, DrawWhatTheStudyCounted) {
   for (const auto& p : paths) EXPECT_TRUE(std::filesystem::exists(p)) << p;
 
   const std::string delay = read(dir / "chatter-delay.svg");
-  EXPECT_NE(delay.find("E: 1 of 4 unstable cuts within 3 revolutions of the onset, 3 detected, "
-                       "0 false detections"),
+  EXPECT_NE(delay.find("E: 1 of 5 unstable cuts within 3 revolutions of the onset, 3 detected, "
+                       "1 false detections"),
             std::string::npos);
   EXPECT_NE(delay.find("later than 10 revolutions (1)"), std::string::npos);
   EXPECT_NE(delay.find("missed (1)"), std::string::npos);
+  EXPECT_NE(delay.find("before the onset, the mill&apos;s q below it: false (1)"),
+            std::string::npos);
+  EXPECT_NE(delay.find("the label&apos;s onset (below: E decided before it)"), std::string::npos);
   EXPECT_NE(delay.find("the goal: 3 revolutions"), std::string::npos);
   EXPECT_NE(delay.find("widths 25, 37, 50 mm"), std::string::npos);
   EXPECT_NE(delay.find(">a made-up study<"), std::string::npos);
@@ -90,7 +98,7 @@ TEST(ChatterStudyFigures, DrawWhatTheStudyCounted) {
       std::string::npos);
   EXPECT_NE(margin.find("not drawn: 1 stable, 1 unstable cuts"), std::string::npos);
   EXPECT_NE(margin.find("stable: the largest level (1)"), std::string::npos);
-  EXPECT_NE(margin.find("unstable: the onset&apos;s level (3)"), std::string::npos);
+  EXPECT_NE(margin.find("unstable: the onset&apos;s level (4)"), std::string::npos);
 
   const std::string estimate = read(dir / "chatter-estimate.svg");
   // 4000 pairs at one speed, every eighth drawn.
@@ -98,9 +106,9 @@ TEST(ChatterStudyFigures, DrawWhatTheStudyCounted) {
   EXPECT_NE(estimate.find("1500 rpm (4000)"), std::string::npos);
 
   const std::string error = read(dir / "chatter-error.svg");
-  EXPECT_NE(error.find("(4 unstable cuts)"), std::string::npos);
+  EXPECT_NE(error.find("(5 unstable cuts)"), std::string::npos);
   EXPECT_NE(error.find("E: 3 not within 3 revolutions"), std::string::npos);
-  EXPECT_NE(error.find("E: 0 false detections"), std::string::npos);
+  EXPECT_NE(error.find("E: 1 false detections"), std::string::npos);
   // Three rows: three bars for each of the two counts.
   EXPECT_EQ(count(error, "stroke-width=\"3.00\""), 6u);
 }

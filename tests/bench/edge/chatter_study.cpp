@@ -30,7 +30,10 @@
 // chatter.) Stable cuts give the false-alarm figures
 // (revolutions in the cut whose statistic exceeded the threshold, confirmed
 // detections, the largest statistic), unstable cuts the delay from the onset
-// to E's detection, in revolutions. E judges the vibration it estimates
+// to E's detection, in revolutions. A detection before the onset is chatter
+// the label has not called yet (within 3 revolutions) where the mill's q
+// passed the onset's 0.15 in the revolution decided on or the three before
+// it, and a false detection where it did not. E judges the vibration it estimates
 // from the simulated dynamometer's wideband F_y channel, with S as the
 // backup (edge/CHATTER.md); --force-only takes the estimate away
 // (S alone, as on a sensor without that channel), --vibration-* set its
@@ -116,6 +119,7 @@ namespace {
 struct Cell {
   double rpm = 0, width = 0, runout = 0;
   int runs = 0, stable_runs = 0, unstable_runs = 0, detected = 0, false_detections = 0;
+  int premature = 0;  // of the false detections, those before an unstable cut's onset
   uint64_t stable_revs = 0, exceed = 0;
   int within3 = 0;
   double stable_max = 0, stable_max_q = 0, worst_delay_revs = 0, unstable_min_peak = 1e9;
@@ -147,6 +151,17 @@ std::string q_list(const std::vector<double>& qs) {
   return out;
 }
 
+// A decision before the label's onset is chatter the label has not called
+// yet when the mill's own q passed the onset's threshold in the revolution
+// decided on or the three before it (as many as E's rules look at);
+// otherwise it is a false detection, though the cut chatters later.
+bool passed_onset_level(const std::vector<RevolutionChange>& changes, size_t at) {
+  for (size_t r = at >= 3 ? at - 3 : 0; r <= at && r < changes.size(); ++r) {
+    if (changes[r].comparable && changes[r].q > kChatterOnsetQ) return true;
+  }
+  return false;
+}
+
 // An unstable cut E detected before the label's onset, with the mill's own
 // q (the labelling run's) from three revolutions before E's detection to
 // the one after: was the cut already changing when E decided?
@@ -156,6 +171,7 @@ struct EarlyCut {
   double delay_revs = 0;  // < 0
   std::vector<double> q;
   double most_before_onset = 0;  // the mill's largest q from E's detection to the onset
+  bool premature = false;        // !passed_onset_level: a false detection
 };
 
 // A cut's labelling run, revolution by revolution (the mill's own q), kept
@@ -183,14 +199,19 @@ RuleOnError label_rule_on_error(const std::vector<LabelledCut>& cuts, double sig
     for (RevolutionChange& c : read) c.q *= 1 + error(rng);
     mark_onsets(read);
     double decided = -1;
+    size_t decided_at = 0;
     for (size_t r = 0; r + 1 < read.size(); ++r) {
       if (!(read[r].onset_level > kChatterOnsetQ)) continue;
       const bool grew = !read[r + 1].comparable || read[r + 1].q > read[r].q;
-      decided = cut.end_s[grew || r + 2 >= read.size() ? r + 1 : r + 2];
+      decided_at = grew || r + 2 >= read.size() ? r + 1 : r + 2;
+      decided = cut.end_s[decided_at];
       break;
     }
     if (cut.onset_s < 0) {
       out.false_detections += decided >= 0 ? 1 : 0;
+    } else if (decided >= 0 && decided < cut.onset_s - 1e-9 &&
+               !passed_onset_level(cut.changes, decided_at)) {
+      ++out.false_detections;  // before the onset, on q that had not reached it
     } else if (decided >= 0) {
       ++out.detected;
       if ((decided - cut.onset_s) * cut.rpm / 60.0 <= 3.0) ++out.within3;
@@ -544,6 +565,7 @@ int main(int argc, char** argv) {
             const RunResult& run = e_muted ? labelled : heard;
             const double onset = label.chatter_onset_s();
             const double first_detection = s.chatter_detected_s();
+            bool premature = false;  // before the onset: a false detection
             ++run_id;
             {
               const auto changes = vibration_change(labelled, still_period_s);
@@ -561,17 +583,6 @@ int main(int argc, char** argv) {
                   break;
                 }
                 cut_level = std::max(cut_level, change.onset_level);
-              }
-              {
-                auto& fc = figures.cuts.emplace_back();
-                fc.rpm = rpm;
-                fc.width = width;
-                fc.runout = runout;
-                fc.unstable = onset >= 0;
-                fc.detected = first_detection >= 0;
-                fc.delay_revs = fc.detected ? (first_detection - onset) * rpm / 60.0
-                                            : std::numeric_limits<double>::quiet_NaN();
-                fc.level = cut_level;
               }
               if (onset < 0) {
                 stable_level = std::max(stable_level, cut_level);
@@ -596,6 +607,7 @@ int main(int argc, char** argv) {
                     if (changes[r].comparable)
                       ec.most_before_onset = std::max(ec.most_before_onset, changes[r].q);
                   }
+                  ec.premature = premature = !passed_onset_level(changes, at);
                   early.push_back(ec);
                 }
                 if (delay < 0 ? first_detection < 0 : delay > 3.0) {
@@ -617,6 +629,18 @@ int main(int argc, char** argv) {
                   }
                   late.push_back(lc);
                 }
+              }
+              {
+                auto& fc = figures.cuts.emplace_back();
+                fc.rpm = rpm;
+                fc.width = width;
+                fc.runout = runout;
+                fc.unstable = onset >= 0;
+                fc.premature = premature;
+                fc.detected = first_detection >= 0 && !premature;
+                fc.delay_revs = first_detection >= 0 ? (first_detection - onset) * rpm / 60.0
+                                                     : std::numeric_limits<double>::quiet_NaN();
+                fc.level = cut_level;
               }
               // E's revolutions end on the trace's (both count the same
               // clock): pair each with the trace's that ends there, for the
@@ -727,7 +751,10 @@ int main(int argc, char** argv) {
               c.false_detections += first_detection >= 0 ? 1 : 0;
             } else {
               ++c.unstable_runs;
-              if (first_detection >= 0) {
+              if (premature) {
+                ++c.false_detections;
+                ++c.premature;
+              } else if (first_detection >= 0) {
                 ++c.detected;
                 const double delay = (first_detection - onset) * rpm / 60.0;
                 c.worst_delay_revs = std::max(c.worst_delay_revs, delay);
@@ -749,6 +776,7 @@ int main(int argc, char** argv) {
         all.unstable_runs += c.unstable_runs;
         all.detected += c.detected;
         all.false_detections += c.false_detections;
+        all.premature += c.premature;
         all.stable_revs += c.stable_revs;
         all.exceed += c.exceed;
         all.stable_max = std::max(all.stable_max, c.stable_max);
@@ -764,10 +792,12 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "\n");
   std::printf(
       "\nstable cuts: %d runs, %llu revolutions in the cut, %llu with S above %.2f, %d confirmed "
-      "false detections; largest S %.3f (margin: threshold / largest = %.2f); largest q %.3f\n",
+      "false detections (%d of them before an unstable cut's onset, the mill's q below %.2f); "
+      "largest S %.3f (margin: threshold / largest = %.2f); largest q %.3f\n",
       all.stable_runs, static_cast<unsigned long long>(all.stable_revs),
-      static_cast<unsigned long long>(all.exceed), threshold, all.false_detections, all.stable_max,
-      all.stable_max > 0 ? threshold / all.stable_max : 0.0, all.stable_max_q);
+      static_cast<unsigned long long>(all.exceed), threshold, all.false_detections, all.premature,
+      kChatterOnsetQ, all.stable_max, all.stable_max > 0 ? threshold / all.stable_max : 0.0,
+      all.stable_max_q);
   std::printf(
       "unstable cuts: %d runs, %d detected, %d within 3 revolutions of the onset; worst delay "
       "%.1f revolutions; smallest peak S of a detected cut %.3f\n",
@@ -806,15 +836,19 @@ int main(int argc, char** argv) {
   }
   if (!early.empty()) {
     std::printf(
-        "\nunstable cuts E detected before the label's onset (counted within 3 revolutions): "
-        "the mill's own q from three revolutions before E's detection to the one after (the "
-        "fourth is E's; - not comparable), and its largest q from there to the onset\n%6s %6s "
-        "%6s %8s %4s %7s  %-35s %8s\n",
-        "rpm", "width", "runout", "fraction", "seed", "delay", "mill's q", "most");
+        "\nunstable cuts E detected before the label's onset: the mill's own q from three "
+        "revolutions before E's detection to the one after (the fourth is E's; - not "
+        "comparable), its largest q from there to the onset, and how the detection is counted "
+        "(chatter the label had not called, within 3 revolutions, where the mill's q passed "
+        "%.2f in E's revolution or the three before; a false detection where it did not)\n%6s "
+        "%6s %6s %8s %4s %7s  %-35s %8s  %s\n",
+        kChatterOnsetQ, "rpm", "width", "runout", "fraction", "seed", "delay", "mill's q", "most",
+        "counted");
     for (const auto& ec : early) {
       const std::string qs = q_list(ec.q);
-      std::printf("%6.0f %6.0f %6.0f %8.2f %4d %7.0f  %-35s %8.3f\n", ec.rpm, ec.width, ec.runout,
-                  ec.fraction, ec.seed, ec.delay_revs, qs.c_str(), ec.most_before_onset);
+      std::printf("%6.0f %6.0f %6.0f %8.2f %4d %7.0f  %-35s %8.3f  %s\n", ec.rpm, ec.width,
+                  ec.runout, ec.fraction, ec.seed, ec.delay_revs, qs.c_str(), ec.most_before_onset,
+                  ec.premature ? "false" : "within 3");
     }
   }
   std::printf(
