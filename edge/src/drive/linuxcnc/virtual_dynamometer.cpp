@@ -37,6 +37,12 @@
 //   in  s32   break-tooth      set to a tooth (1-based): that tooth loses its
 //                              edge from this period on (as the simulated
 //                              mill's simulation.tooth_breaks); 0: none
+//   in  float break-after-s    the break waits until the cutter has been
+//                              in the part this long (machine time, from
+//                              the first tooth in the blank mounted last):
+//                              a test sets it before the job, so the break
+//                              lands where it means, whatever the load on
+//                              the host; 0: at once
 //   out float force-x/y/z      force on the tool (N), filtered, with noise
 //   out float force-y-wide     F_y through the wideband filter
 //                              (simulation.f_y_wide_cutoff_hz and
@@ -102,6 +108,7 @@ struct Pins {
   hal_float_t* spindle_rps;
   hal_bit_t* new_part;
   hal_s32_t* break_tooth;
+  hal_float_t* break_after_s;
   hal_float_t* force_x;
   hal_float_t* force_y;
   hal_float_t* force_z;
@@ -139,6 +146,7 @@ struct Dyno {
   // met last inside the part: read while the cutter leaves it.
   double exit_level = 0;
   int broken_tooth = 0;  // the last tooth broken by the break-tooth pin
+  double cut_s = -1;     // since the first tooth met this blank (-1: not yet)
   long period_ns = 0;
 
   Dyno(mc::MillingModel m, const mc::SimulatorOptions& o) : model(std::move(m)), sim(model, o) {}
@@ -161,6 +169,7 @@ struct Dyno {
     lp_y_wide.reset();
     have_x = false;
     clear_of_part = false;
+    cut_s = -1;
   }
 };
 
@@ -232,11 +241,15 @@ void update(void* /*arg*/, long period) {
   d.last_new_part = np;
   // A tooth set on break-tooth loses its edge (1 mm back, as a lost edge in
   // the simulated mill), once per setting.
+  // With break-after-s it waits for that much of the cut.
   const int tooth = *p.break_tooth;
-  if (tooth != d.broken_tooth && tooth >= 1 && tooth <= d.model.cutter.teeth) {
-    d.sim.set_tooth_runout_mm(tooth - 1, d.sim.tooth_runout_mm(tooth - 1) - 1.0);
+  const bool real_tooth = tooth >= 1 && tooth <= d.model.cutter.teeth;
+  const double wait_s = *p.break_after_s;
+  const bool due = !(wait_s > 0) || (d.cut_s >= 0 && d.cut_s >= wait_s);
+  if (tooth != d.broken_tooth && (!real_tooth || due)) {
+    if (real_tooth) d.sim.set_tooth_runout_mm(tooth - 1, d.sim.tooth_runout_mm(tooth - 1) - 1.0);
+    d.broken_tooth = tooth;
   }
-  d.broken_tooth = tooth;
 
   const double x = *p.x_mm;
   const double z = *p.z_mm;
@@ -301,6 +314,11 @@ void update(void* /*arg*/, long period) {
   *p.power_w = smp.power_w;
   *p.depth_mm = in.depth_mm;
   *p.teeth_in_cut = smp.teeth_in_cut;
+  if (d.cut_s >= 0) {
+    d.cut_s += dt;
+  } else if (smp.teeth_in_cut > 0) {
+    d.cut_s = 0;
+  }
   *p.status = status;
   *p.samples = *p.samples + 1;
 }
@@ -315,6 +333,7 @@ int make_pins(int comp) {
   r |= hal_pin_float_new("smc-dyno.spindle-rps", HAL_IN, &p.spindle_rps, comp);
   r |= hal_pin_bit_new("smc-dyno.new-part", HAL_IN, &p.new_part, comp);
   r |= hal_pin_s32_new("smc-dyno.break-tooth", HAL_IN, &p.break_tooth, comp);
+  r |= hal_pin_float_new("smc-dyno.break-after-s", HAL_IN, &p.break_after_s, comp);
   r |= hal_pin_float_new("smc-dyno.force-x", HAL_OUT, &p.force_x, comp);
   r |= hal_pin_float_new("smc-dyno.force-y", HAL_OUT, &p.force_y, comp);
   r |= hal_pin_float_new("smc-dyno.force-z", HAL_OUT, &p.force_z, comp);
