@@ -59,8 +59,9 @@
 // false one. After the tables: the unstable
 // cuts E caught late or missed, each with the mill's own q around its onset
 // (how long it stayed above the onset's threshold, and how high it went
-// after); the unstable cuts E detected before the label's onset (counted
-// within 3 revolutions), each with the mill's own q around E's detection;
+// after); the unstable cuts E detected before the label's onset (within 3
+// revolutions, or false detections: above), each with the mill's own q
+// around E's detection and how it is counted;
 // the label's own margin (the largest onset level of a stable cut and the smallest of
 // an unstable cut's onset, in the mill's q: smc/edge/runner.hpp,
 // vibration_change); the label's own rule run as a detector on the mill's
