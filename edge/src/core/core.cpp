@@ -472,6 +472,7 @@ void EdgeCore::tick(bool overrun) noexcept {
     r.x_mm = drive_sample_.x_mm;
     r.chatter_ratio = s_.chatter_ratio;
     r.chatter_vibration_ratio = s_.chatter_vibration_ratio;
+    r.chatter_vibration_flip = s_.chatter_vibration_flip;
     r.gain_estimate = s_.gain_estimate;
     r.engagement_min = engagement_min_;
     r.pass_index = static_cast<int16_t>(drive_sample_.pass_index);

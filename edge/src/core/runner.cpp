@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <numbers>
 #include <stdexcept>
 
 #include "smc/edge/fractional_delay.hpp"
@@ -102,7 +104,8 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
 // RMS(v_k - v_{k-1}) / RMS(v_k) of the relative tool-part vibration v over
 // consecutive revolutions: about 0.02-0.05 while the cutter enters the part
 // (the forced vibration changes slowly), growing past 1 in chatter.
-std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s) {
+std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s,
+                                               int teeth) {
   constexpr double kMinEngagement = 0.05;
   std::vector<RevolutionChange> out;
   if (run.samples.size() < 16) return out;
@@ -125,6 +128,38 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
   }
   const size_t revs = starts.size() - 1;
   out.resize(revs);
+  // A period doubling's share of a revolution's AC energy: its vibration's
+  // components at the spindle orders halfway between tooth harmonics
+  // (teeth / 2, 3 teeth / 2, ... below the Nyquist frequency), each read by
+  // its own Fourier sum over the revolution's samples, against the
+  // revolution's AC energy (Parseval: exact for a whole number of samples a
+  // revolution, within a per cent or so of it between).
+  const bool doubling = teeth >= 2 && teeth % 2 == 0;
+  auto halfway_share = [&](size_t r) {
+    const size_t first = starts[r], end = starts[r + 1];
+    const auto n = static_cast<double>(end - first);
+    double mean = 0;
+    for (size_t k = first; k < end; ++k) mean += run.samples[k].vibration_y_mm;
+    mean /= n;
+    double ac = 0;
+    for (size_t k = first; k < end; ++k) {
+      const double v = run.samples[k].vibration_y_mm - mean;
+      ac += v * v;
+    }
+    const double spindle_hz = 1.0 / period_s(run.samples[first]);
+    double halfway = 0;
+    for (int order = teeth / 2; order * spindle_hz < 0.5 / dt; order += teeth) {
+      // e^(-i omega t) sample by sample, by rotation.
+      const std::complex<double> step =
+          std::polar(1.0, -2 * std::numbers::pi * order * spindle_hz * dt);
+      std::complex<double> turn = 1, sum = 0;
+      for (size_t k = first; k < end; ++k, turn *= step) {
+        sum += (run.samples[k].vibration_y_mm - mean) * turn;
+      }
+      halfway += 2 * std::norm(sum) / n;
+    }
+    return ac > 0 ? std::min(halfway / ac, 1.0) : 0.0;
+  };
   FractionalDelay delay;
   delay.set(0, FractionalDelay::kMaxHalf);
   // Per revolution: the statistic, and whether it is comparable with the
@@ -178,6 +213,7 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
     }
     c.comparable = ok && energy > 0;
     c.q = energy > 0 ? std::sqrt(diff / energy) : 0;
+    if (c.comparable && doubling) c.flip = halfway_share(r);
   }
   mark_onsets(out);
   return out;
@@ -185,7 +221,7 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
 
 void mark_onsets(std::vector<RevolutionChange>& out) {
   const size_t revs = out.size();
-  for (RevolutionChange& c : out) c.onset_level = 0;
+  for (RevolutionChange& c : out) c.onset_level = c.flip_onset_level = 0;
   // Entering the part the statistic starts high and falls as the engagement
   // settles; chatter makes it grow. Onset: a comparable revolution above the
   // threshold and above the one before, followed by a larger one -- or by
@@ -203,13 +239,26 @@ void mark_onsets(std::vector<RevolutionChange>& out) {
       out[r].onset_level = std::min(c.q, next.q);
     }
   }
+  // A period doubling: its share held for three revolutions (or up to a
+  // reaction to it, or the pass's end). It repeats every revolution once it
+  // has grown, and q saw it only while it grew: in the detector study's
+  // full-width cuts q stayed at 0.02-0.10 while the share grew from below
+  // 0.01 to 0.9 (edge/CHATTER.md, "Period doubling").
+  for (size_t r = 0; r < revs; ++r) {
+    if (!out[r].comparable || out[r].flip <= 0) continue;
+    double level = out[r].flip;
+    for (size_t j = r + 1; j <= r + 2 && j < revs && out[j].comparable; ++j) {
+      level = std::min(level, out[j].flip);
+    }
+    out[r].flip_onset_level = level;
+  }
 }
 
 namespace {
 
-double chatter_onset(const RunResult& run, double still_period_s) {
-  for (const RevolutionChange& c : vibration_change(run, still_period_s)) {
-    if (c.onset_level > kChatterOnsetQ) return run.samples[c.first_sample].t_s;
+double chatter_onset(const RunResult& run, double still_period_s, int teeth) {
+  for (const RevolutionChange& c : vibration_change(run, still_period_s, teeth)) {
+    if (c.onset()) return run.samples[c.first_sample].t_s;
   }
   return -1;
 }
@@ -388,7 +437,7 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
     if ((r.active & bit(ModuleId::C)) != 0) hold_s += r.period_s;
   }
   sum.set_feed_hold_s(hold_s);
-  const double onset = chatter_onset(run, p.slow_period_s);
+  const double onset = chatter_onset(run, p.slow_period_s, p.teeth);
   sum.set_chatter_onset_s(onset);
   sum.set_detection_delay_s(onset >= 0 && detected_t >= 0 ? detected_t - onset : -1);
   return sum;

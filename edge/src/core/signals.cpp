@@ -61,7 +61,8 @@ SignalMask changed_signals(const Signals& x, const Signals& y) noexcept {
   mark(differs(x.chatter_detected, y.chatter_detected) ||
            differs(x.chatter_ratio, y.chatter_ratio) ||
            differs(x.chatter_frequency_hz, y.chatter_frequency_hz) ||
-           differs(x.chatter_vibration_ratio, y.chatter_vibration_ratio),
+           differs(x.chatter_vibration_ratio, y.chatter_vibration_ratio) ||
+           differs(x.chatter_vibration_flip, y.chatter_vibration_flip),
        Signal::kChatterDetected);
   mark(differs(x.rewrite_requests, y.rewrite_requests) ||
            differs(x.suppression_hold, y.suppression_hold) ||

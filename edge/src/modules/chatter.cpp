@@ -67,7 +67,8 @@ void AutomaticChatterDetector::reset() noexcept {
   vibration_at_ = vibration_run_ = 0;
   wide_channel_ = false;
   q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
-  q_above_ = 0;
+  q_above_ = flip_above_ = 0;
+  last_flip_ = 0;
 }
 
 Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
@@ -124,6 +125,7 @@ double AutomaticChatterDetector::vibration_correction(double frequency_hz,
 
 double AutomaticChatterDetector::vibration_ratio(int samples, double period_samples) noexcept {
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  last_flip_ = 0;
   if (mode_count_ == 0 || samples < 4 || !(period_samples >= 1)) return nan;
   if (static_cast<size_t>(samples) > vibration_buffer_.size()) return nan;
   // This revolution and the one before, back to the sample before the first
@@ -162,6 +164,12 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   const double noise = p_.vibration_sensor_noise_rms_n;
   const double noise_bin = static_cast<double>(n) * noise * noise;
   double changed = 0, energy = 0, noise_changed = 0, noise_energy = 0;
+  // The share of the AC energy at the spindle orders halfway between tooth
+  // harmonics (a period doubling, with an even number of teeth; the bins
+  // are the spindle orders, within a sample's share of them).
+  const auto teeth = static_cast<size_t>(std::max(p_.teeth, 0));
+  const bool doubling = teeth >= 2 && teeth % 2 == 0;
+  double flip = 0, noise_flip = 0, dc = 0, noise_dc = 0;
   // The delay's power gain per bin, for the noise through it: kept while
   // the revolution's size and the point between samples hold.
   if (noise > 0 && (delay_gain_n_ != n || delay_gain_u_ != delay_.fraction() ||
@@ -181,14 +189,21 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
     const double c = (single ? 1.0 : 2.0) * vibration_correction(f, &held_norm);
     changed += c * std::norm(change[k]);
     energy += c * std::norm(now[k]);
+    const bool halfway = doubling && k % teeth == teeth / 2;
+    if (halfway) flip += c * std::norm(now[k]);
+    if (k == 0) dc = c * std::norm(now[k]);
     if (noise > 0) {
       const double delayed = delay_gain_[k];
       noise_energy += c * noise_bin * held_norm;
       noise_changed += c * noise_bin * held_norm * (1 + delayed);
+      if (halfway) noise_flip += c * noise_bin * held_norm;
+      if (k == 0) noise_dc = c * noise_bin * held_norm;
     }
   }
   changed = std::max(changed - noise_changed, 0.0);
   energy -= noise_energy;
+  const double ac = energy - (dc - noise_dc);
+  last_flip_ = doubling && ac > 0 ? std::clamp((flip - noise_flip) / ac, 0.0, 1.0) : 0.0;
   return energy > 0 ? std::sqrt(changed / energy) : nan;
 }
 
@@ -241,6 +256,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   const int samples = filled_;
   filled_ = 0;
   s.chatter_vibration_ratio = 0;
+  s.chatter_vibration_flip = 0;
   // A partial revolution (the detector was just activated, or a bad sample
   // never reached it): no decision, and the estimate's comparison starts
   // again, since the ring has a gap.
@@ -248,7 +264,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
     vibration_run_ = 0;
     wide_channel_ = false;
     q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
-    q_above_ = 0;
+    q_above_ = flip_above_ = 0;
     return Status::kOk;
   }
   double freq = 0;
@@ -355,8 +371,16 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       const bool confirmed = climbed && q > p_.chatter_vibration_confirmed && s2_ > 0 &&
                              s1_ > cg * s2_ && sq > cg * s1_;
       q_above_ = q > p_.chatter_vibration_level ? q_above_ + 1 : 0;
+      // A period doubling: with an even number of teeth the vibration at
+      // the spindle orders halfway between tooth harmonics repeats every
+      // revolution, so q sees it only while it grows (from the first
+      // hundredths of a per cent of a stable cut's energy to 0.9 and more of
+      // it in the study's full-width cuts, q at 0.02-0.10 meanwhile). Its
+      // share above `flip` in three judged revolutions in a row.
+      s.chatter_vibration_flip = last_flip_;
+      flip_above_ = last_flip_ > p_.chatter_vibration_flip ? flip_above_ + 1 : 0;
       if (rising || climbing || pausing || net || jumped || steep || confirmed ||
-          q_above_ >= kVibrationConfirm) {
+          q_above_ >= kVibrationConfirm || flip_above_ >= kVibrationConfirm) {
         s.chatter_detected = true;
       }
       q3_ = q2_;
@@ -366,7 +390,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       s1_ = sq;
     } else {
       q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
-      q_above_ = 0;
+      q_above_ = flip_above_ = 0;
     }
   }
 

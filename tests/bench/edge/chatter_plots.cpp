@@ -172,8 +172,12 @@ std::filesystem::path margin_figure(const std::filesystem::path& dir,
   unstable.color = "#D55E00";
   unstable.marker = Marker::diamond;
   double stable_most = 0, unstable_least = HUGE_VAL;
-  int stable_out = 0, unstable_out = 0;
+  int stable_out = 0, unstable_out = 0, flips = 0;
   for (const auto& c : f.cuts) {
+    if (c.unstable && c.by_flip) {
+      ++flips;
+      continue;
+    }
     if (c.unstable) {
       unstable_least = std::min(unstable_least, c.level);
     } else {
@@ -197,9 +201,9 @@ std::filesystem::path margin_figure(const std::filesystem::path& dir,
   fig.set_size(960, 540);
   char x_label[300];
   std::snprintf(x_label, sizeof x_label,
-                "spindle speed, rpm (widths %s left to right); outside %.2f-%.2f, not drawn: %d "
-                "stable, %d unstable cuts",
-                joined(sp.widths, " mm").c_str(), kLo, kHi, stable_out, unstable_out);
+                "spindle speed, rpm (widths %s); not drawn: outside %.2f-%.2f %d stable, %d "
+                "unstable cuts, and %d period doublings",
+                joined(sp.widths, " mm").c_str(), kLo, kHi, stable_out, unstable_out, flips);
   fig.x_axis().label = x_label;
   fig.x_axis().min = sp.lo;
   fig.x_axis().max = sp.hi;

@@ -33,6 +33,9 @@ struct ChatterStudyFigures {
     // The mill's q: a stable cut's largest onset level, an unstable cut's
     // onset level (smc/edge/runner.hpp, vibration_change).
     double level = 0;
+    // Unstable: the label's onset is a period doubling's, which q does not
+    // see (its level is then not q's, and not drawn on the margin).
+    bool by_flip = false;
   };
   struct QPair {
     double rpm = 0, mill_q = 0, e_q = 0;

@@ -53,7 +53,11 @@ ChatterStudyFigures study() {
   cut(2000, 50, 10, true, -41.0, 0.152);
   f.cuts.back().premature = true;
   f.cuts.back().detected = false;
-  f.unstable = 5;
+  // A period doubling's onset, which q did not see: its level is not q's,
+  // and the margin neither draws it nor counts it.
+  cut(2000, 50, 0, true, 2.0, 0.02);
+  f.cuts.back().by_flip = true;
+  f.unstable = 6;
   f.e_false = 1;
   f.e_late = 3;
   for (int i = 0; i < 4000; ++i) {
@@ -80,7 +84,7 @@ TEST(ChatterStudyFigures, DrawWhatTheStudyCounted) {
   for (const auto& p : paths) EXPECT_TRUE(std::filesystem::exists(p)) << p;
 
   const std::string delay = read(dir / "chatter-delay.svg");
-  EXPECT_NE(delay.find("E: 1 of 5 unstable cuts within 3 revolutions of the onset, 3 detected, "
+  EXPECT_NE(delay.find("E: 2 of 6 unstable cuts within 3 revolutions of the onset, 4 detected, "
                        "1 false detections"),
             std::string::npos);
   EXPECT_NE(delay.find("later than 10 revolutions (1)"), std::string::npos);
@@ -96,7 +100,9 @@ TEST(ChatterStudyFigures, DrawWhatTheStudyCounted) {
   EXPECT_NE(
       margin.find("stable cuts&apos; onset levels up to 0.1490, unstable cuts&apos; from 0.1510"),
       std::string::npos);
-  EXPECT_NE(margin.find("not drawn: 1 stable, 1 unstable cuts"), std::string::npos);
+  EXPECT_NE(margin.find("not drawn: outside 0.10-0.20 1 stable, 1 unstable cuts, and 1 period "
+                        "doublings"),
+            std::string::npos);
   EXPECT_NE(margin.find("stable: the largest level (1)"), std::string::npos);
   EXPECT_NE(margin.find("unstable: the onset&apos;s level (4)"), std::string::npos);
 
@@ -106,7 +112,7 @@ TEST(ChatterStudyFigures, DrawWhatTheStudyCounted) {
   EXPECT_NE(estimate.find("1500 rpm (4000)"), std::string::npos);
 
   const std::string error = read(dir / "chatter-error.svg");
-  EXPECT_NE(error.find("(5 unstable cuts)"), std::string::npos);
+  EXPECT_NE(error.find("(6 unstable cuts)"), std::string::npos);
   EXPECT_NE(error.find("E: 3 not within 3 revolutions"), std::string::npos);
   EXPECT_NE(error.find("E: 1 false detections"), std::string::npos);
   // Three rows: three bars for each of the two counts.

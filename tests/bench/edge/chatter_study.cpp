@@ -9,7 +9,8 @@
 //       [--vibration-net-dip X] [--vibration-jump X] [--vibration-jump-growth X]
 //       [--vibration-jump-dip X] [--vibration-steep X] [--vibration-steep-growth X]
 //       [--vibration-steep-from X] [--vibration-confirmed X]
-//       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-backup X]
+//       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-flip X]
+//       [--vibration-backup X]
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
 //       [--sample-period S] [--mill-model FILE] [--no-regeneration]
 //
@@ -30,10 +31,13 @@
 // chatter.) Stable cuts give the false-alarm figures
 // (revolutions in the cut whose statistic exceeded the threshold, confirmed
 // detections, the largest statistic), unstable cuts the delay from the onset
-// to E's detection, in revolutions. A detection before the onset is chatter
-// the label has not called yet (within 3 revolutions) where the mill's q
-// passed the onset's 0.15 in the revolution decided on or the three before
-// it, and a false detection where it did not. E judges the vibration it estimates
+// to E's detection, in revolutions. The label's onset is q's, or with an
+// even number of teeth a period doubling's (its share of the vibration's
+// energy above 0.5 for three revolutions; q cannot see it once grown:
+// smc/edge/runner.hpp). A detection before the onset is chatter the label
+// has not called yet (within 3 revolutions) where the mill's q passed the
+// onset's 0.15, or that share 0.5, in the revolution decided on or the
+// three before it, and a false detection where it did not. E judges the vibration it estimates
 // from the simulated dynamometer's wideband F_y channel, with S as the
 // backup (edge/CHATTER.md); --force-only takes the estimate away
 // (S alone, as on a sensor without that channel), --vibration-* set its
@@ -64,8 +68,10 @@
 // around E's detection and how it is counted;
 // the label's own margin (the largest onset level of a stable cut and the smallest of
 // an unstable cut's onset, in the mill's q: smc/edge/runner.hpp,
-// vibration_change); the label's own rule run as a detector on the mill's
-// q read with a relative error of 0-10 % drawn per revolution (5 draws
+// vibration_change); the period doubling's onsets (how many it called
+// before q, or alone), its margin in the share, and E's share against the
+// mill's; the label's own rules run as a detector on the mill's
+// q and share read with a relative error of 0-10 % drawn per revolution (5 draws
 // each, counted as E's decisions are: how exact a reading of q the goal
 // asks for on these labels); E's q against the mill's on the labelling runs'
 // comparable revolutions with the mill's q in 0.10-0.30, by speed; then
@@ -135,6 +141,7 @@ struct LateCut {
   std::vector<double> q;   // the mill's q from the revolution before the onset, up to 6
   int above = 0;           // revolutions from the onset on with q above the onset's 0.15
   double later_most = -1;  // the largest q after those, to the end of the pass (-1: none)
+  bool by_flip = false;    // the onset a period doubling's: the values are its share, not q
 };
 
 // q values in columns, "-" for one that is not comparable (< 0).
@@ -153,12 +160,16 @@ std::string q_list(const std::vector<double>& qs) {
 }
 
 // A decision before the label's onset is chatter the label has not called
-// yet when the mill's own q passed the onset's threshold in the revolution
-// decided on or the three before it (as many as E's rules look at);
-// otherwise it is a false detection, though the cut chatters later.
+// yet when the mill's own q, or its period doubling's share, passed the
+// onset's threshold in the revolution decided on or the three before it (as
+// many as E's rules look at); otherwise it is a false detection, though the
+// cut chatters later.
 bool passed_onset_level(const std::vector<RevolutionChange>& changes, size_t at) {
   for (size_t r = at >= 3 ? at - 3 : 0; r <= at && r < changes.size(); ++r) {
-    if (changes[r].comparable && changes[r].q > kChatterOnsetQ) return true;
+    if (changes[r].comparable &&
+        (changes[r].q > kChatterOnsetQ || changes[r].flip > kChatterOnsetFlip)) {
+      return true;
+    }
   }
   return false;
 }
@@ -197,14 +208,27 @@ RuleOnError label_rule_on_error(const std::vector<LabelledCut>& cuts, double sig
   std::vector<RevolutionChange> read;
   for (const LabelledCut& cut : cuts) {
     read = cut.changes;
-    for (RevolutionChange& c : read) c.q *= 1 + error(rng);
+    for (RevolutionChange& c : read) {
+      c.q *= 1 + error(rng);
+      c.flip *= 1 + error(rng);
+    }
     mark_onsets(read);
     double decided = -1;
     size_t decided_at = 0;
     for (size_t r = 0; r + 1 < read.size(); ++r) {
-      if (!(read[r].onset_level > kChatterOnsetQ)) continue;
-      const bool grew = !read[r + 1].comparable || read[r + 1].q > read[r].q;
-      decided_at = grew || r + 2 >= read.size() ? r + 1 : r + 2;
+      if (!read[r].onset()) continue;
+      // A rise confirmed by the next revolution or after a pause; a period
+      // doubling by the two after it (or fewer, up to a reaction).
+      if (read[r].onset_level > kChatterOnsetQ) {
+        const bool grew = !read[r + 1].comparable || read[r + 1].q > read[r].q;
+        decided_at = grew || r + 2 >= read.size() ? r + 1 : r + 2;
+      } else {
+        decided_at = r;
+        while (decided_at < r + 2 && decided_at + 1 < read.size() &&
+               read[decided_at + 1].comparable) {
+          ++decided_at;
+        }
+      }
       decided = cut.end_s[decided_at];
       break;
     }
@@ -271,6 +295,8 @@ int main(int argc, char** argv) {
        "S's growth in each of the last two revolutions that confirms"},
       {"--vibration-level", &EdgeParameters::chatter_vibration_level,
        "q above this in 3 revolutions is chatter"},
+      {"--vibration-flip", &EdgeParameters::chatter_vibration_flip,
+       "the estimate's period-doubling share above this in 3 revolutions is chatter"},
       {"--vibration-backup", &EdgeParameters::chatter_vibration_backup,
        "S above this in 3 revolutions is chatter (the backup)"},
       {"--vibration-noise", &EdgeParameters::vibration_sensor_noise_rms_n,
@@ -421,6 +447,7 @@ int main(int argc, char** argv) {
     ep.chatter_vibration_rise = ep.chatter_vibration_climb = ep.chatter_vibration_pause =
         ep.chatter_vibration_net = ep.chatter_vibration_jump = ep.chatter_vibration_steep =
             ep.chatter_vibration_confirmed = ep.chatter_vibration_level = HUGE_VAL;
+    ep.chatter_vibration_flip = 2;                           // a share: at most 1
     ep.chatter_vibration_backup = ep.chatter_threshold = 2;  // S is a share: at most 1
   };
   // One cut on the simulated mill, E listening or not.
@@ -462,8 +489,9 @@ int main(int argc, char** argv) {
         "jumps past %.2f by more than x%.2f and stays above it, falling by no more than "
         "%.0f%%, or rises three times in a row by more than x%.2f each from %.2f to past "
         "%.2f (to past %.2f where S, below, rose by more than x%.2f in each of the last two), "
-        "or exceeds %.2f in 3; or when S, the non-harmonic share of F_z energy, exceeds "
-        "%.2f in 3",
+        "or exceeds %.2f in 3; or when the estimate's share at the spindle orders halfway "
+        "between tooth harmonics (a period doubling) exceeds %.2f in 3; or when S, the "
+        "non-harmonic share of F_z energy, exceeds %.2f in 3",
         shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
         shown.vibration_sensor_noise_rms_n, shown.chatter_vibration_rise,
         shown.chatter_vibration_climb, shown.chatter_vibration_pause,
@@ -473,7 +501,8 @@ int main(int argc, char** argv) {
         100 * shown.chatter_vibration_jump_dip, shown.chatter_vibration_steep_growth,
         shown.chatter_vibration_steep_from, shown.chatter_vibration_steep,
         shown.chatter_vibration_confirmed, shown.chatter_vibration_confirmed_growth,
-        shown.chatter_vibration_level, shown.chatter_vibration_backup);
+        shown.chatter_vibration_level, shown.chatter_vibration_flip,
+        shown.chatter_vibration_backup);
   } else {
     std::printf(
         "module E: threshold %.2f on S, the non-harmonic share of F_z energy, %d revolutions "
@@ -502,6 +531,14 @@ int main(int argc, char** argv) {
   // unstable cut's onset; and E's estimate of q against the mill's own, on
   // the revolutions near the threshold, by speed.
   double stable_level = 0, unstable_level = HUGE_VAL;
+  // The same for the period doubling's share (the onsets it called alone,
+  // how many the rule on q never called, and how many revolutions earlier
+  // than q's it was where q's came too), and E's share against the mill's
+  // on revolutions where the mill's is past 0.3, and E's largest in stable
+  // cuts (the least of three revolutions in a row, as its rule counts).
+  double stable_flip = 0, unstable_flip = HUGE_VAL, stable_e_flip = 0;
+  int flip_onsets = 0, flip_only = 0;
+  std::vector<double> flip_ahead, flip_error;
   std::vector<LateCut> late;
   std::vector<EarlyCut> early;
   std::map<double, std::vector<double>> estimate_error;  // rpm -> q_E / q
@@ -569,7 +606,8 @@ int main(int argc, char** argv) {
             bool premature = false;  // before the onset: a false detection
             ++run_id;
             {
-              const auto changes = vibration_change(labelled, still_period_s);
+              const auto changes = vibration_change(labelled, still_period_s,
+                                                    static_cast<int>(raw.operation().teeth()));
               LabelledCut& kept = labelled_cuts.emplace_back();
               kept.rpm = rpm;
               kept.onset_s = onset;
@@ -577,18 +615,42 @@ int main(int argc, char** argv) {
               for (const auto& change : changes) {
                 kept.end_s.push_back(labelled.samples[change.end_sample - 1].t_s);
               }
-              double cut_level = 0;
+              // The cut's level in q and in the period doubling's share:
+              // a stable cut's largest, an unstable cut's at its onset (by
+              // flip: the onset was the period doubling's alone).
+              double cut_level = 0, cut_flip = 0;
+              bool by_flip = false;
               for (const auto& change : changes) {
-                if (onset >= 0 && change.onset_level > kChatterOnsetQ) {
+                if (onset >= 0 && change.onset()) {
                   cut_level = change.onset_level;
+                  cut_flip = change.flip_onset_level;
+                  by_flip = !(change.onset_level > kChatterOnsetQ);
                   break;
                 }
                 cut_level = std::max(cut_level, change.onset_level);
+                cut_flip = std::max(cut_flip, change.flip_onset_level);
               }
               if (onset < 0) {
                 stable_level = std::max(stable_level, cut_level);
+                stable_flip = std::max(stable_flip, cut_flip);
+              } else if (by_flip) {
+                ++flip_onsets;
+                unstable_flip = std::min(unstable_flip, cut_flip);
+                // The onset the rule on q alone would have found, if any.
+                size_t q_at = 0, flip_at = 0;
+                while (flip_at < changes.size() && !changes[flip_at].onset()) ++flip_at;
+                while (q_at < changes.size() && !(changes[q_at].onset_level > kChatterOnsetQ)) {
+                  ++q_at;
+                }
+                if (q_at == changes.size()) {
+                  ++flip_only;
+                } else {
+                  flip_ahead.push_back(static_cast<double>(q_at - flip_at));
+                }
               } else {
                 unstable_level = std::min(unstable_level, cut_level);
+              }
+              if (onset >= 0) {
                 const double delay =
                     first_detection >= 0 ? (first_detection - onset) * rpm / 60.0 : -1;
                 if (first_detection >= 0 && delay < 0) {
@@ -612,21 +674,24 @@ int main(int argc, char** argv) {
                   early.push_back(ec);
                 }
                 if (delay < 0 ? first_detection < 0 : delay > 3.0) {
-                  LateCut lc{rpm, width, runout, fraction, seed, delay, {}, 0, -1};
+                  LateCut lc{rpm, width, runout, fraction, seed, delay, {}, 0, -1, by_flip};
                   size_t at = 0;
-                  while (at < changes.size() && !(changes[at].onset_level > kChatterOnsetQ)) ++at;
+                  while (at < changes.size() && !changes[at].onset()) ++at;
+                  // The witness that called the onset: q, or the period
+                  // doubling's share.
+                  auto value = [&](const RevolutionChange& x) { return by_flip ? x.flip : x.q; };
+                  const double level = by_flip ? kChatterOnsetFlip : kChatterOnsetQ;
                   for (size_t r = at > 0 ? at - 1 : 0; r < changes.size() && r <= at + 5; ++r) {
-                    lc.q.push_back(changes[r].comparable ? changes[r].q : -1);
+                    lc.q.push_back(changes[r].comparable ? value(changes[r]) : -1);
                   }
                   size_t r = at;
-                  while (r < changes.size() && changes[r].comparable &&
-                         changes[r].q > kChatterOnsetQ) {
+                  while (r < changes.size() && changes[r].comparable && value(changes[r]) > level) {
                     ++lc.above;
                     ++r;
                   }
                   for (; r < changes.size(); ++r) {
                     if (changes[r].comparable)
-                      lc.later_most = std::max(lc.later_most, changes[r].q);
+                      lc.later_most = std::max(lc.later_most, value(changes[r]));
                   }
                   late.push_back(lc);
                 }
@@ -642,6 +707,7 @@ int main(int argc, char** argv) {
                 fc.delay_revs = first_detection >= 0 ? (first_detection - onset) * rpm / 60.0
                                                      : std::numeric_limits<double>::quiet_NaN();
                 fc.level = cut_level;
+                fc.by_flip = by_flip;
               }
               // E's revolutions end on the trace's (both count the same
               // clock): pair each with the trace's that ends there, for the
@@ -664,6 +730,9 @@ int main(int argc, char** argv) {
                   continue;
                 }
                 mill_q[i] = change.q;
+                if (r.chatter_vibration_flip > 0 && change.flip >= 0.3) {
+                  flip_error.push_back(r.chatter_vibration_flip / change.flip);
+                }
                 if (!plot_dir.empty() && r.chatter_vibration_ratio > 0) {
                   figures.q_pairs.push_back({rpm, change.q, r.chatter_vibration_ratio});
                 }
@@ -675,6 +744,19 @@ int main(int argc, char** argv) {
                     (r.active & bit(ModuleId::E)) != 0 && r.contact) {
                   still[rpm].push_back(r.chatter_vibration_ratio);
                 }
+              }
+            }
+            if (onset < 0) {
+              // E's period-doubling share in a stable cut, as its rule
+              // counts it: the least of three judged revolutions in a row.
+              double a = 0, b = 0;
+              for (const auto& r : labelled.revolutions) {
+                const double f = r.chatter_vibration_flip;
+                if (f > 0 && a > 0 && b > 0) {
+                  stable_e_flip = std::max(stable_e_flip, std::min({a, b, f}));
+                }
+                a = b;
+                b = f;
               }
             }
             if (dump != nullptr) {
@@ -812,10 +894,11 @@ int main(int argc, char** argv) {
     std::printf(
         "\nunstable cuts caught late or missed: the mill's own q from the revolution before the "
         "onset (- not comparable), the revolutions from the onset on above %.2f, and the largest "
-        "q after them to the end of the pass (- none: it lasted to the end)\n%6s %6s %6s %8s %4s "
+        "q after them to the end of the pass (- none: it lasted to the end); where the onset was "
+        "a period doubling's (flip), its share instead of q, above %.2f\n%6s %6s %6s %8s %4s "
         "%7s  %-47s %5s %6s\n",
-        kChatterOnsetQ, "rpm", "width", "runout", "fraction", "seed", "delay", "mill's q", "above",
-        "later");
+        kChatterOnsetQ, kChatterOnsetFlip, "rpm", "width", "runout", "fraction", "seed", "delay",
+        "mill's q", "above", "later");
     for (const auto& lc : late) {
       const std::string qs = q_list(lc.q);
       char delay[16];
@@ -831,8 +914,9 @@ int main(int argc, char** argv) {
       } else {
         std::snprintf(later, sizeof later, "%.3f", lc.later_most);
       }
-      std::printf("%6.0f %6.0f %6.0f %8.2f %4d %7s  %-47s %5d %6s\n", lc.rpm, lc.width, lc.runout,
-                  lc.fraction, lc.seed, delay, qs.c_str(), lc.above, later);
+      std::printf("%6.0f %6.0f %6.0f %8.2f %4d %7s  %-47s %5d %6s%s\n", lc.rpm, lc.width, lc.runout,
+                  lc.fraction, lc.seed, delay, qs.c_str(), lc.above, later,
+                  lc.by_flip ? "  flip" : "");
     }
   }
   if (!early.empty()) {
@@ -856,6 +940,38 @@ int main(int argc, char** argv) {
       "\nthe label's own margin, in the mill's q: the largest onset level of a stable cut %.4f, "
       "the smallest of an unstable cut's onset %.4f (threshold %.2f)\n",
       stable_level, unstable_level < HUGE_VAL ? unstable_level : 0.0, kChatterOnsetQ);
+  if (estimate) {
+    std::printf(
+        "the label's period doubling (the mill's vibration at the spindle orders halfway between "
+        "tooth harmonics, its share of the AC energy held over three revolutions): %d onsets "
+        "called by it alone, %d of them never by the rule on q",
+        flip_onsets, flip_only);
+    if (!flip_ahead.empty()) {
+      std::sort(flip_ahead.begin(), flip_ahead.end());
+      std::printf(", the others %.0f-%.0f revolutions (median %.0f) before q's", flip_ahead.front(),
+                  flip_ahead.back(), flip_ahead[flip_ahead.size() / 2]);
+    }
+    std::printf(
+        "; its margin: the largest level of a stable cut %.4f, the smallest of such an onset "
+        "%.4f (threshold %.2f)\n",
+        stable_flip, unstable_flip < HUGE_VAL ? unstable_flip : 0.0, kChatterOnsetFlip);
+    std::printf(
+        "E's period-doubling share: in stable cuts at most %.4f (the least of three in a row; "
+        "E's rule %.2f)",
+        stable_e_flip, shown.chatter_vibration_flip);
+    if (!flip_error.empty()) {
+      std::sort(flip_error.begin(), flip_error.end());
+      auto pct = [&](double f) {
+        return flip_error[static_cast<size_t>(f * static_cast<double>(flip_error.size() - 1) +
+                                              0.5)];
+      };
+      std::printf(
+          "; against the mill's where the mill's is 0.3 or more (%zu revolutions): p5 "
+          "%.3f, median %.3f, p95 %.3f",
+          flip_error.size(), pct(0.05), pct(0.5), pct(0.95));
+    }
+    std::printf("\n");
+  }
   {
     // How much the label's decision depends on q's last per cent: its own
     // rule, run as a detector on the mill's q read with an error.

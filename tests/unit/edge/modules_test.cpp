@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
 #include <initializer_list>
 #include <numbers>
 #include <random>
@@ -1760,6 +1761,78 @@ TEST(AutomaticChatterDetector, ASteepClimbThatSConfirmsIsChatter) {
   no_rule.chatter_vibration_confirmed = HUGE_VAL;
   EXPECT_EQ(run(no_rule, {15, 30, 60, 120, 0, 0}, &ignored, nullptr), -1)
       << "q falls back after it: without the rule, no other fires";
+}
+
+// A period doubling, grown: with 4 teeth at 1500 rpm the wideband F_y
+// carries, beside the tooth harmonic, the 26th spindle order (650 Hz,
+// halfway between the 6th and 7th tooth harmonics, at the tool's y mode),
+// the same every revolution. q reads it as no change at all, so none of
+// q's rules can fire; its share of the estimated vibration's energy is
+// above `flip` from the first judged revolution, and E fires on the third.
+// Runout's spindle orders (7 and 9) are no period doubling: their share
+// reads 0, and E does not fire on them.
+TEST(AutomaticChatterDetector, APeriodDoublingIsChatterThoughEveryRevolutionRepeats) {
+  auto run = [](const EdgeParameters& p, double doubling_n, double runout_n,
+                std::vector<double>* flip, std::vector<double>* q) {
+    AutomaticChatterDetector e;
+    e.configure(p);
+    Signals s;
+    s.spindle_rpm = 1500;
+    s.engagement = 1;
+    s.revolution_samples = p.samples_per_revolution;
+    int k0 = 0;
+    for (int r = 0; r < 12; ++r) {
+      for (int k = 0; k < p.samples_per_revolution; ++k, ++k0) {
+        const double t = k0 * p.sample_period_s;
+        auto wave = [&](double hz, double phase) {
+          return std::sin(2 * std::numbers::pi * hz * t + phase);
+        };
+        const double orders = runout_n * (wave(175, 0.3) + wave(225, 1.1));
+        s.sample.f_z_n = 300 + 80 * wave(100, 0) + orders;
+        s.sample.f_y_wide_n = 400 + 150 * wave(100, 0.5) + orders + doubling_n * wave(650, 0.7);
+        e.on_sample(s);
+      }
+      e.update(s);
+      if (s.chatter_vibration_ratio > 0) {
+        flip->push_back(s.chatter_vibration_flip);
+        q->push_back(s.chatter_vibration_ratio);
+      }
+      if (s.chatter_detected) return static_cast<int>(flip->size()) - 1;
+    }
+    return -1;
+  };
+  EdgeParameters p = with_y_modes(params());
+  p.vibration_sensor_cutoff_hz = 0;
+  ASSERT_EQ(p.teeth, 4);
+  std::vector<double> flip, q;
+  ASSERT_EQ(run(p, 150, 0, &flip, &q), 2) << "the third judged revolution";
+  for (size_t r = 0; r < flip.size(); ++r) {
+    EXPECT_GT(flip[r], p.chatter_vibration_flip) << r;
+    EXPECT_LT(q[r], 0.01) << r << ": q sees no change";
+  }
+  // The structure's own share, |H|^2 F^2 at 650 Hz against the tooth
+  // harmonic's at 100 Hz, which the estimate's correction reads (the
+  // synthetic channel has no anti-alias filter to undo: cutoff 0).
+  auto h2 = [&](double hz) {
+    const std::complex<double> jw(0, 2 * std::numbers::pi * hz);
+    std::complex<double> h = 0;
+    for (int i = 0; i < p.vibration_mode_count; ++i) {
+      const auto& m = p.vibration_modes[i];
+      const double wn = m.natural_frequency_rad_s;
+      h += wn * wn / m.stiffness_n_per_mm / (jw * jw + 2 * m.damping_ratio * wn * jw + wn * wn);
+    }
+    return std::norm(h);
+  };
+  const double own = h2(650) / (h2(650) + h2(100));  // both 150 N
+  EXPECT_NEAR(flip.back(), own, 0.02 * own);
+  EdgeParameters no_rule = p;
+  no_rule.chatter_vibration_flip = 2;
+  std::vector<double> f2, q2;
+  EXPECT_EQ(run(no_rule, 150, 0, &f2, &q2), -1) << "without the rule no other fires";
+  std::vector<double> f3, q3;
+  EXPECT_EQ(run(p, 0, 50, &f3, &q3), -1) << "runout is no period doubling";
+  ASSERT_FALSE(f3.empty());
+  for (const double x : f3) EXPECT_LT(x, 0.01);
 }
 
 // The channel's white noise passes through the structure's modes into the

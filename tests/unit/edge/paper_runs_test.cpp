@@ -1047,3 +1047,61 @@ TEST(ChatterLabel, MarkingOnsetsAgainFollowsTheQItIsGiven) {
   EXPECT_EQ(changes[7].onset_level, 0);
   for (const auto& c : changes) EXPECT_LE(c.onset_level, kChatterOnsetQ);
 }
+
+// A period doubling: with 4 teeth at 2000 rpm, a vibration at the 22nd
+// spindle order (733 Hz, halfway between the 5th and 6th tooth harmonics)
+// grows by 6 % a revolution from a hundred-thousandth of the forced
+// vibration's energy until it holds at three times its amplitude. Every
+// revolution it is a slightly larger copy of the one before, so q stays
+// far below the onset's 0.15 and the rule on q never calls it (as in the
+// detector study's full-width cuts, where it was called up to 52
+// revolutions late or never). Its share of the energy calls the onset at
+// the first revolution past kChatterOnsetFlip; with an odd number of
+// teeth, or none given, there is no such share.
+TEST(ChatterLabel, APeriodDoublingIsChatterThoughEveryRevolutionRepeats) {
+  const double rpm = 2000, dt = 0.0005, spindle_hz = rpm / 60;
+  const int per_rev = 60;
+  RunResult run;
+  for (int k = 0; k < 200 * per_rev; ++k) {
+    TraceSample s{};
+    s.t_s = dt * k;
+    s.spindle_rpm = rpm;
+    auto order = [&](double n, double shift) {
+      return std::sin(2 * M_PI * n * spindle_hz * s.t_s + shift);
+    };
+    const double grown =
+        std::min(0.01 * std::sqrt(1e-5) * std::pow(1.06, k / static_cast<double>(per_rev)), 0.03);
+    s.vibration_y_mm = 0.02 + 0.01 * order(4, 0.5) + 0.002 * order(8, 0.2) + grown * order(22, 1.0);
+    s.engagement = 1;
+    s.in_pass = true;
+    s.contact = true;
+    run.samples.push_back(s);
+  }
+  const auto changes = vibration_change(run, 0.04, 4);
+  ASSERT_GE(changes.size(), 190u);
+  size_t onset = changes.size();
+  for (size_t r = 0; r < changes.size(); ++r) {
+    if (r >= 2) {
+      EXPECT_LT(changes[r].onset_level, kChatterOnsetQ) << r;
+    }
+    if (onset == changes.size() && changes[r].onset()) onset = r;
+  }
+  ASSERT_LT(onset, changes.size()) << "the period doubling is an onset";
+  EXPECT_GT(changes[onset].flip, kChatterOnsetFlip);
+  EXPECT_LT(changes[onset].flip, 0.56) << "the first revolution past it";
+  EXPECT_LT(changes[onset - 1].flip, kChatterOnsetFlip);
+  EXPECT_LT(changes[2].flip, 1e-4) << "at the start, a hundred-thousandth";
+  double most_q = 0;
+  for (size_t r = 2; r < changes.size(); ++r) most_q = std::max(most_q, changes[r].q);
+  EXPECT_LT(most_q, 0.08) << "q sees only the growth";
+  // Its share, exactly: a^2 / (a^2 + 0.01^2 + 0.002^2) for the amplitude a
+  // at the revolution's middle, within the growth over half a revolution.
+  const double a = 0.01 * std::sqrt(1e-5) * std::pow(1.06, static_cast<double>(onset) + 0.5);
+  EXPECT_NEAR(changes[onset].flip, a * a / (a * a + 1e-4 + 4e-6), 0.01);
+  for (const int teeth : {0, 3}) {
+    for (const auto& c : vibration_change(run, 0.04, teeth)) {
+      EXPECT_EQ(c.flip, 0) << teeth;
+      EXPECT_FALSE(c.onset()) << teeth;
+    }
+  }
+}

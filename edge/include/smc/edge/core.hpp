@@ -89,6 +89,7 @@ struct RevolutionRecord {
   double x_mm = 0;
   double chatter_ratio = 0;
   double chatter_vibration_ratio = 0;  // E's q (0: not judged, or no estimate)
+  double chatter_vibration_flip = 0;   // E's period-doubling share (0: not judged)
   double gain_estimate = 0;
   double engagement_min = 0;  // lowest engagement during the revolution (NaN: unknown)
   int16_t pass_index = 0;

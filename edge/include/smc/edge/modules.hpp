@@ -99,8 +99,9 @@ class OperatorChatterDetector final : public Module {
 // Parameters::chatter_vibration_* (q rising past `rise`, or past `climb`
 // for longer, or past `pause` with a revolution's pause, or above `net`
 // three times while growing by half, or jumping past `jump` and held there
-// a revolution; q above `level`; or S above
-// `backup`), both energies less the channel's expected noise
+// a revolution; q above `level`; the estimate's share at the spindle
+// orders halfway between tooth harmonics, a period doubling, above `flip`;
+// or S above `backup`), both energies less the channel's expected noise
 // (Parameters::vibration_sensor_noise_rms_n); without the channel,
 // by S above `chatter_threshold` in `chatter_confirm_revolutions`
 // consecutive judged revolutions. It stays set until reset.
@@ -118,6 +119,7 @@ class AutomaticChatterDetector final : public Module {
     s.chatter_ratio = 0;
     s.chatter_frequency_hz = 0;
     s.chatter_vibration_ratio = 0;
+    s.chatter_vibration_flip = 0;
   }
   Status on_sample(Signals& s) noexcept override;
   Status update(Signals& s) noexcept override;
@@ -127,8 +129,13 @@ class AutomaticChatterDetector final : public Module {
   // revolution in samples), both energies less the channel's expected noise
   // (a change below it reads 0); NaN when the estimate does not cover both,
   // or the noise's share is all of the energy. Real-time safe after
-  // configure().
+  // configure(). Also sets last_flip().
   double vibration_ratio(int samples, double period_samples) noexcept;
+  // Of the revolution vibration_ratio() last read: the estimated vibration's
+  // share of its AC energy at the spindle orders halfway between tooth
+  // harmonics (a period doubling; 0 with an odd number of teeth, or none
+  // read), the channel's expected noise taken out of it.
+  double last_flip() const noexcept { return last_flip_; }
 
   // The factor that takes a bin of the estimate's energy at this frequency
   // to the structure's: |H(j omega)|^2 / (|H_held(e^(j omega T))|^2 |L(j omega)|^2),
@@ -182,6 +189,8 @@ class AutomaticChatterDetector final : public Module {
   double q1_ = 0, q2_ = 0, q3_ = 0;  // q of the last three judged revolutions (NaN: none)
   double s1_ = 0, s2_ = 0;           // S of the last two of them (NaN: none, or S not judged)
   int q_above_ = 0;                  // judged revolutions in a row with q above `level`
+  int flip_above_ = 0;               // and with the period doubling's share above `flip`
+  double last_flip_ = 0;             // that share, of the last vibration_ratio()
 };
 
 // G: chatter suppression routine: run F (the core rewrites the program),

@@ -85,17 +85,36 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run);
 // threshold and above the revolution before, then larger still -- or, after
 // one revolution above the threshold, larger than it; or not comparable
 // any more, a reaction or the pass's end). 0 where it would be at none.
-// The onset is the first revolution whose level exceeds kChatterOnsetQ.
+//
+// q cannot see a period doubling once it has grown: with an even number of
+// teeth, a vibration at the spindle orders halfway between tooth harmonics
+// repeats every revolution. So with `teeth` even, each revolution also has
+// `flip`, that vibration's share of the revolution's AC energy, and its
+// flip onset level: the least share of it and the next two revolutions
+// (fewer where the next is not comparable any more, a reaction or the
+// pass's end), on comparable revolutions; 0 elsewhere.
+//
+// The onset is the first revolution whose onset level exceeds
+// kChatterOnsetQ or whose flip onset level exceeds kChatterOnsetFlip.
 struct RevolutionChange {
   size_t first_sample = 0, end_sample = 0;  // [first, end) in RunResult::samples
   double q = 0;
   bool comparable = false;
   double onset_level = 0;
+  double flip = 0;
+  double flip_onset_level = 0;
+  bool onset() const noexcept;
 };
 inline constexpr double kChatterOnsetQ = 0.15;
-std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s);
-// Sets each revolution's onset_level from the q and comparable of the
-// revolutions around it (the rule above; vibration_change calls it). The
+inline constexpr double kChatterOnsetFlip = 0.5;
+inline bool RevolutionChange::onset() const noexcept {
+  return onset_level > kChatterOnsetQ || flip_onset_level > kChatterOnsetFlip;
+}
+std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s,
+                                               int teeth = 0);
+// Sets each revolution's onset_level and flip_onset_level from the q, flip
+// and comparable of the revolutions around it (the rules above;
+// vibration_change calls it). The
 // detector study runs it again on q read with an error, to measure how
 // much the label's own decision depends on q's last per cent.
 void mark_onsets(std::vector<RevolutionChange>& changes);

@@ -22,7 +22,7 @@ enum class Signal : uint32_t {
   kForcePeak = 1u << 2,         // I: f_y_peak_n, revolutions, f_y_updated
   kContact = 1u << 3,           // J: contact
   kChatterDetected = 1u << 4,   // E: chatter_detected, chatter_ratio, chatter_frequency_hz,
-                                //    chatter_vibration_ratio
+                                //    chatter_vibration_ratio, chatter_vibration_flip
   kSuppression = 1u << 5,       // G: rewrite_requests, suppression_hold, suppression_done
   kProgramRewritten = 1u << 6,  // F: program_rewritten
   kGainEstimate = 1u << 7,      // H: gain_estimate, gain_valid
@@ -89,6 +89,9 @@ struct Signals {
   // The estimated vibration's change from the revolution before over its
   // RMS, last revolution (0: not judged, or no estimate)
   double chatter_vibration_ratio = 0;
+  // The estimated vibration's share at the spindle orders halfway between
+  // tooth harmonics (a period doubling), last judged revolution (0: none)
+  double chatter_vibration_flip = 0;
   // --- G chatter suppression routine (with F)
   uint32_t rewrite_requests = 0;   // G: requests to run F so far (F serves each once)
   bool suppression_hold = false;   // G holds the feed

@@ -138,7 +138,10 @@ struct Parameters {
   // fall back before a second rise above `rise`), or so only to past
   // `confirmed` where F_z's non-harmonic share rose too, by more than
   // `confirmed_growth` x in each of the last two (the two channels' evidence
-  // together); or exceeds `level` in three in a row; or when
+  // together); or exceeds `level` in three in a row; or when the estimated
+  // vibration's share at the spindle orders halfway between tooth harmonics
+  // exceeds `flip` in three (a period doubling, with an even number of
+  // teeth, repeats every revolution: q sees it only while it grows); or when
   // F_z's non-harmonic share exceeds `backup` in three (chatter locked to a
   // spindle harmonic repeats every revolution, and only F_z's spectrum shows
   // it once grown).
@@ -158,6 +161,7 @@ struct Parameters {
   double chatter_vibration_confirmed = 0.18;
   double chatter_vibration_confirmed_growth = 1.2;
   double chatter_vibration_level = 0.8;
+  double chatter_vibration_flip = 0.5;
   double chatter_vibration_backup = 0.7;
 
   // Derived, in samples.
