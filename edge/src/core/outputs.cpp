@@ -76,17 +76,18 @@ void write_outputs(const std::string& dir, const EdgeCore& core, const RunResult
     std::fprintf(f.get(),
                  "t_s,revolution,pass_index,pass_count,x_mm,depth_mm,f_y_peak_n,f_ref_n,"
                  "feedrate_mm_s,feed_per_tooth_mm,power_peak_w,power_mean_w,chatter_ratio,"
-                 "chatter_vibration_ratio,gain_estimate,"
+                 "chatter_vibration_ratio,chatter_vibration_flip,gain_estimate,"
                  "engagement,contact,chatter,fault_hold,modules,steps\n");
     for (const auto& r : run.revolutions) {
       std::fprintf(f.get(),
-                   "%.4f,%u,%d,%d,%.3f,%.3f,%.2f,%.2f,%.3f,%.5f,%.1f,%.1f,%.4f,%.4f,%.2f,%.3f,%d,%"
-                   "d,%d,%s,%s\n",
+                   "%.4f,%u,%d,%d,%.3f,%.3f,%.2f,%.2f,%.3f,%.5f,%.1f,%.1f,%.4f,%.4f,%.4f,%.2f,%.3f,"
+                   "%d,%d,%d,%s,%s\n",
                    r.t_s, r.revolution, r.pass_index, r.pass_count, r.x_mm, r.depth_mm,
                    r.f_y_peak_n, r.f_ref_n, r.feedrate_mm_s, r.feed_per_tooth_mm, r.power_peak_w,
-                   r.power_mean_w, r.chatter_ratio, r.chatter_vibration_ratio, r.gain_estimate,
-                   r.engagement_min, r.contact ? 1 : 0, r.chatter ? 1 : 0, r.fault_hold ? 1 : 0,
-                   modules_string(r.active).c_str(), steps_string(core, r.active_steps).c_str());
+                   r.power_mean_w, r.chatter_ratio, r.chatter_vibration_ratio,
+                   r.chatter_vibration_flip, r.gain_estimate, r.engagement_min, r.contact ? 1 : 0,
+                   r.chatter ? 1 : 0, r.fault_hold ? 1 : 0, modules_string(r.active).c_str(),
+                   steps_string(core, r.active_steps).c_str());
     }
   }
   {

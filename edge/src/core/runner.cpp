@@ -111,7 +111,9 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
   if (run.samples.size() < 16) return out;
   const double dt = run.samples[1].t_s - run.samples[0].t_s;
   if (!(dt > 0)) return out;
-  const ModuleMask hold = static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G));
+  // The holds that react to chatter: C's, G's, and O's while the spindle changes speed.
+  const ModuleMask hold =
+      static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G) | bit(ModuleId::O));
   auto period_s = [&](const TraceSample& x) {
     return x.spindle_rpm > 0 ? 60.0 / x.spindle_rpm : still_period_s;
   };

@@ -695,6 +695,13 @@ TEST(SmcTwoPlus, ASpeedChangeAloneSuppressesThePapersChatterAndShortensTheCycle)
   EXPECT_GE(onset_after(*none, at_speed_s + 1.0), 0) << "the check cannot see chatter";
   ASSERT_TRUE(two->summary.completed());
   EXPECT_EQ(two->summary.program_rewrites(), 1u);
+  // The two runs are the same cut up to E's detection, and so is their
+  // onset: O's hold while the spindle changes speed is a reaction, as G's
+  // is, and the label compares no revolution across it (it read the held
+  // revolution as comparable, and its onset a revolution later than
+  // SMC II's).
+  EXPECT_EQ(s.chatter_detected_s(), two->summary.chatter_detected_s());
+  EXPECT_EQ(s.chatter_onset_s(), two->summary.chatter_onset_s());
   EXPECT_LE(s.cycle_time_s(), 0.7 * two->summary.cycle_time_s())
       << "SMC II+ " << s.cycle_time_s() << " s, SMC II " << two->summary.cycle_time_s() << " s";
   EXPECT_EQ(plus->activity_mismatches, 0u) << plus->first_mismatch;
