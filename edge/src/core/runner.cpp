@@ -135,7 +135,9 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
   // (teeth / 2, 3 teeth / 2, ... below the Nyquist frequency), each read by
   // its own Fourier sum over the revolution's samples, against the
   // revolution's AC energy (Parseval: exact for a whole number of samples a
-  // revolution, within a per cent or so of it between).
+  // revolution; between, orders next to a halfway one leak into it, below
+  // 0.01 of the energy at 1194 rpm in
+  // ChatterLabel.AVibrationThatRepeatsBetweenSamplesIsNoChange).
   const bool doubling = teeth >= 2 && teeth % 2 == 0;
   auto halfway_share = [&](size_t r) {
     const size_t first = starts[r], end = starts[r + 1];

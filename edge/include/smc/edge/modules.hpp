@@ -129,13 +129,9 @@ class AutomaticChatterDetector final : public Module {
   // revolution in samples), both energies less the channel's expected noise
   // (a change below it reads 0); NaN when the estimate does not cover both,
   // or the noise's share is all of the energy. Real-time safe after
-  // configure(). Also sets last_flip().
+  // configure(). It also reads the revolution's period-doubling share
+  // (last_flip_, below).
   double vibration_ratio(int samples, double period_samples) noexcept;
-  // Of the revolution vibration_ratio() last read: the estimated vibration's
-  // share of its AC energy at the spindle orders halfway between tooth
-  // harmonics (a period doubling; 0 with an odd number of teeth, or none
-  // read), the channel's expected noise taken out of it.
-  double last_flip() const noexcept { return last_flip_; }
 
   // The factor that takes a bin of the estimate's energy at this frequency
   // to the structure's: |H(j omega)|^2 / (|H_held(e^(j omega T))|^2 |L(j omega)|^2),
@@ -190,7 +186,11 @@ class AutomaticChatterDetector final : public Module {
   double s1_ = 0, s2_ = 0;           // S of the last two of them (NaN: none, or S not judged)
   int q_above_ = 0;                  // judged revolutions in a row with q above `level`
   int flip_above_ = 0;               // and with the period doubling's share above `flip`
-  double last_flip_ = 0;             // that share, of the last vibration_ratio()
+  // Of the revolution vibration_ratio() last read: the estimate's share of
+  // its AC energy at the spindle orders halfway between tooth harmonics (a
+  // period doubling; 0 with an odd number of teeth, or none read), the
+  // channel's expected noise taken out of it.
+  double last_flip_ = 0;
 };
 
 // G: chatter suppression routine: run F (the core rewrites the program),
