@@ -926,6 +926,29 @@ TEST(SmcTwoPlus, ADriveThatCannotChangeTheSpindleSpeedIsRefused) {
 
 namespace {
 
+// A trace of `samples` samples of kTraceDt, fully in the cut at `rpm`, its
+// vibration `vibration_mm(t_s)`; spindle_order is the n-th spindle order's
+// sine at a phase `shift`.
+constexpr double kTraceDt = 0.0005;
+double spindle_order(double rpm, double n, double shift, double t_s) {
+  return std::sin(2 * M_PI * n * rpm / 60 * t_s + shift);
+}
+RunResult spindle_trace(double rpm, int samples,
+                        const std::function<double(double)>& vibration_mm) {
+  RunResult run;
+  for (int k = 0; k < samples; ++k) {
+    TraceSample s{};
+    s.t_s = kTraceDt * k;
+    s.spindle_rpm = rpm;
+    s.vibration_y_mm = vibration_mm(s.t_s);
+    s.engagement = 1;
+    s.in_pass = true;
+    s.contact = true;
+    run.samples.push_back(s);
+  }
+  return run;
+}
+
 // A trace whose vibration repeats one shape every revolution, scaled by
 // a_r: the change from one revolution to the next is (a_r - a_r-1) x the
 // shape, so q_r = 1 - a_r-1 / a_r exactly, and a_r is chosen for the q_r
@@ -960,22 +983,12 @@ RunResult scaled_revolutions(const std::vector<double>& q, double rpm, int sampl
 // change (linear interpolation read q 0.17 here: the 33rd order, 657 Hz,
 // came back at half its amplitude).
 TEST(ChatterLabel, AVibrationThatRepeatsBetweenSamplesIsNoChange) {
-  RunResult run;
-  const double dt = 0.0005, rpm = 60.0 / (100.5 * dt), order_hz = rpm / 60;
-  for (int k = 0; k < 3000; ++k) {
-    TraceSample s{};
-    s.t_s = dt * k;
-    s.spindle_rpm = rpm;
-    auto order = [&](double n, double shift) {
-      return std::sin(2 * M_PI * n * order_hz * s.t_s + shift);
-    };
-    s.vibration_y_mm = 0.02 + 0.01 * order(4, 0.5) + 0.004 * order(8, 0.2) +
-                       0.006 * order(31, 1.0) + 0.01 * order(33, 0.3);
-    s.engagement = 1;
-    s.in_pass = true;
-    s.contact = true;
-    run.samples.push_back(s);
-  }
+  const double rpm = 60.0 / (100.5 * kTraceDt);
+  const RunResult run = spindle_trace(rpm, 3000, [&](double t) {
+    auto order = [&](double n, double shift) { return spindle_order(rpm, n, shift, t); };
+    return 0.02 + 0.01 * order(4, 0.5) + 0.004 * order(8, 0.2) + 0.006 * order(31, 1.0) +
+           0.01 * order(33, 0.3);
+  });
   const auto changes = vibration_change(run, 0.04, 4);
   ASSERT_GE(changes.size(), 25u);
   double most = 0, most_flip = 0;
@@ -1071,24 +1084,12 @@ TEST(ChatterLabel, MarkingOnsetsAgainFollowsTheQItIsGiven) {
 // the first revolution past kChatterOnsetFlip; with an odd number of
 // teeth, or none given, there is no such share.
 TEST(ChatterLabel, APeriodDoublingIsChatterThoughEveryRevolutionRepeats) {
-  const double rpm = 2000, dt = 0.0005, spindle_hz = rpm / 60;
-  const int per_rev = 60;
-  RunResult run;
-  for (int k = 0; k < 200 * per_rev; ++k) {
-    TraceSample s{};
-    s.t_s = dt * k;
-    s.spindle_rpm = rpm;
-    auto order = [&](double n, double shift) {
-      return std::sin(2 * M_PI * n * spindle_hz * s.t_s + shift);
-    };
-    const double grown =
-        std::min(0.01 * std::sqrt(1e-5) * std::pow(1.06, k / static_cast<double>(per_rev)), 0.03);
-    s.vibration_y_mm = 0.02 + 0.01 * order(4, 0.5) + 0.002 * order(8, 0.2) + grown * order(22, 1.0);
-    s.engagement = 1;
-    s.in_pass = true;
-    s.contact = true;
-    run.samples.push_back(s);
-  }
+  const double rpm = 2000;
+  const RunResult run = spindle_trace(rpm, 200 * 60, [&](double t) {
+    auto order = [&](double n, double shift) { return spindle_order(rpm, n, shift, t); };
+    const double grown = std::min(0.01 * std::sqrt(1e-5) * std::pow(1.06, t * rpm / 60), 0.03);
+    return 0.02 + 0.01 * order(4, 0.5) + 0.002 * order(8, 0.2) + grown * order(22, 1.0);
+  });
   const auto changes = vibration_change(run, 0.04, 4);
   ASSERT_GE(changes.size(), 190u);
   size_t onset = changes.size();
