@@ -53,6 +53,12 @@ void AutomaticChatterDetector::configure(const EdgeParameters& p) {
   vibration_buffer_.assign(mode_count_ > 0 ? most : 0, 0.0);
   vibration_spectrum_.assign(mode_count_ > 0 ? 2 * (most / 2 + 1) : 0, {});
   delay_gain_.assign(mode_count_ > 0 ? most / 2 + 1 : 0, 1.0);
+  // At most one order a bin below the Nyquist frequency (the slowest
+  // speed's revolution has `most` samples).
+  const size_t orders = mode_count_ > 0 ? most / 2 + 1 : 0;
+  order_twice_cos_.assign(orders, 0.0);
+  order_s1_.assign(orders, 0.0);
+  order_s2_.assign(orders, 0.0);
   delay_gain_n_ = 0;
   reset();
 }
@@ -164,12 +170,7 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   const double noise = p_.vibration_sensor_noise_rms_n;
   const double noise_bin = static_cast<double>(n) * noise * noise;
   double changed = 0, energy = 0, noise_changed = 0, noise_energy = 0;
-  // The share of the AC energy at the spindle orders halfway between tooth
-  // harmonics (a period doubling, with an even number of teeth; the bins
-  // are the spindle orders, within a sample's share of them).
-  const auto teeth = static_cast<size_t>(std::max(p_.teeth, 0));
-  const bool doubling = teeth >= 2 && teeth % 2 == 0;
-  double flip = 0, noise_flip = 0, dc = 0, noise_dc = 0;
+  double dc = 0, noise_dc = 0;
   // The delay's power gain per bin, for the noise through it: kept while
   // the revolution's size and the point between samples hold.
   if (noise > 0 && (delay_gain_n_ != n || delay_gain_u_ != delay_.fraction() ||
@@ -189,21 +190,63 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
     const double c = (single ? 1.0 : 2.0) * vibration_correction(f, &held_norm);
     changed += c * std::norm(change[k]);
     energy += c * std::norm(now[k]);
-    const bool halfway = doubling && k % teeth == teeth / 2;
-    if (halfway) flip += c * std::norm(now[k]);
     if (k == 0) dc = c * std::norm(now[k]);
     if (noise > 0) {
       const double delayed = delay_gain_[k];
       noise_energy += c * noise_bin * held_norm;
       noise_changed += c * noise_bin * held_norm * (1 + delayed);
-      if (halfway) noise_flip += c * noise_bin * held_norm;
       if (k == 0) noise_dc = c * noise_bin * held_norm;
     }
   }
   changed = std::max(changed - noise_changed, 0.0);
   energy -= noise_energy;
+  // The share of the AC energy at the spindle orders halfway between tooth
+  // harmonics (a period doubling, with an even number of teeth). Each such
+  // order below the Nyquist frequency is read by its own Fourier sum over
+  // the revolution's samples, as the label reads the mill's: where a
+  // revolution is not a whole number of samples the FFT's bins are not the
+  // spindle orders, and the bins next to them read it at 0.44-1.43 of the
+  // mill's own (edge/CHATTER.md, "Period doubling"). Each is corrected as q's bins are,
+  // less the channel's expected noise (a Fourier sum of n samples of white
+  // noise has the power of a bin).
+  const int teeth = std::max(p_.teeth, 0);
   const double ac = energy - (dc - noise_dc);
-  last_flip_ = doubling && ac > 0 ? std::clamp((flip - noise_flip) / ac, 0.0, 1.0) : 0.0;
+  last_flip_ = 0;
+  if (teeth >= 2 && teeth % 2 == 0 && ac > 0) {
+    const double mean = now[0].real() / static_cast<double>(n);
+    const double order_hz = 1.0 / (period_samples * p_.sample_period_s);
+    const double nyquist_hz = 0.5 / p_.sample_period_s;
+    // |sum of (v_i - mean) e^(-i omega i)|^2 of every order by Goertzel's
+    // recurrence, the orders side by side in the loop over the samples, so
+    // that no order waits on its own last step.
+    size_t orders = 0;
+    for (int order = teeth / 2; order * order_hz < nyquist_hz && orders < order_s1_.size();
+         order += teeth, ++orders) {
+      order_twice_cos_[orders] =
+          2 * std::cos(2 * std::numbers::pi * order * order_hz * p_.sample_period_s);
+      order_s1_[orders] = order_s2_[orders] = 0;
+    }
+    const double* __restrict twice_cos = order_twice_cos_.data();
+    double* __restrict s1 = order_s1_.data();
+    double* __restrict s2 = order_s2_.data();
+    for (size_t i = 0; i < n; ++i) {
+      const double x = vibration_buffer_[i] - mean;
+      for (size_t j = 0; j < orders; ++j) {
+        const double s0 = x + twice_cos[j] * s1[j] - s2[j];
+        s2[j] = s1[j];
+        s1[j] = s0;
+      }
+    }
+    double flip = 0;
+    for (size_t j = 0; j < orders; ++j) {
+      const double f = (teeth / 2 + static_cast<double>(j) * teeth) * order_hz;
+      const double power = s1[j] * s1[j] + s2[j] * s2[j] - twice_cos[j] * s1[j] * s2[j];
+      double held_norm = 0;
+      const double c = 2 * vibration_correction(f, &held_norm);
+      flip += c * (power - (noise > 0 ? noise_bin * held_norm : 0.0));
+    }
+    last_flip_ = std::clamp(flip / ac, 0.0, 1.0);
+  }
   return energy > 0 ? std::sqrt(changed / energy) : nan;
 }
 

@@ -317,6 +317,26 @@ int clock_revolution(AutomaticChatterDetector& e, Signals& s, double dt, double&
   return n;
 }
 
+// One revolution of the cut at `rpm` (clock_revolution, fully engaged), each
+// sample's forces set by `forces(order, force)`, where order(k, shift) is
+// the k-th spindle order's sine at that sample; E then judges it. Returns
+// the revolution's signals (its samples in `revolution_samples`).
+template <class Forces>
+Signals orders_revolution(AutomaticChatterDetector& e, double rpm, double dt, double& t,
+                          double& phase, const Forces& forces) {
+  Signals s;
+  s.spindle_rpm = rpm;
+  s.engagement = 1;
+  clock_revolution(e, s, dt, t, phase, [&](double at, ForceSample& f) {
+    auto order = [&](double k, double shift) {
+      return std::sin(2 * std::numbers::pi * k * rpm / 60 * at + shift);
+    };
+    forces(order, f);
+  });
+  e.update(s);
+  return s;
+}
+
 }  // namespace
 
 // 1100 rpm at 0.5 ms is 109.09 samples per revolution: the revolution clock
@@ -590,23 +610,17 @@ TEST(AutomaticChatterDetector, ACutThatRepeatsBetweenSamplesIsNoChange) {
   AutomaticChatterDetector e;
   e.configure(p);
   const double dt = p.sample_period_s;
-  const double rpm = 60.0 / (100.5 * dt), order_hz = rpm / 60;
+  const double rpm = 60.0 / (100.5 * dt);
   double t = 0, phase = 0, most_q = 0;
   int judged = 0;
   for (int r = 0; r < 30; ++r) {
-    Signals s;
-    s.spindle_rpm = rpm;
-    s.engagement = 1;
-    const int n = clock_revolution(e, s, dt, t, phase, [&](double at, ForceSample& f) {
-      auto order = [&](double k, double shift) {
-        return std::sin(2 * std::numbers::pi * k * order_hz * at + shift);
-      };
+    const Signals s = orders_revolution(e, rpm, dt, t, phase, [](auto order, ForceSample& f) {
       f.f_z_n = 300 + 80 * order(4, 0);
       f.f_y_wide_n = 400 + 150 * order(4, 0.5) + 60 * order(8, 0.3) + 25 * order(31, 0.2) +
                      25 * order(33, 1.0);
     });
+    const int n = s.revolution_samples;
     ASSERT_TRUE(n == 100 || n == 101) << n;
-    e.update(s);
     ASSERT_FALSE(s.chatter_detected) << "revolution " << r << ", q " << s.chatter_vibration_ratio;
     if (r >= 10) {
       EXPECT_GT(s.chatter_vibration_ratio, 0) << "judged, revolution " << r;
@@ -1763,6 +1777,23 @@ TEST(AutomaticChatterDetector, ASteepClimbThatSConfirmsIsChatter) {
       << "q falls back after it: without the rule, no other fires";
 }
 
+namespace {
+
+// |H(j 2 pi hz)|^2 of the configuration's y modes, mm/N: what the structure
+// makes of a force at that frequency.
+double structure_gain_squared(const EdgeParameters& p, double hz) {
+  const std::complex<double> jw(0, 2 * std::numbers::pi * hz);
+  std::complex<double> h = 0;
+  for (int i = 0; i < p.vibration_mode_count; ++i) {
+    const auto& m = p.vibration_modes[i];
+    const double wn = m.natural_frequency_rad_s;
+    h += wn * wn / m.stiffness_n_per_mm / (jw * jw + 2 * m.damping_ratio * wn * jw + wn * wn);
+  }
+  return std::norm(h);
+}
+
+}  // namespace
+
 // A period doubling, grown: with 4 teeth at 1500 rpm the wideband F_y
 // carries, beside the tooth harmonic, the 26th spindle order (650 Hz,
 // halfway between the 6th and 7th tooth harmonics, at the tool's y mode),
@@ -1813,16 +1844,7 @@ TEST(AutomaticChatterDetector, APeriodDoublingIsChatterThoughEveryRevolutionRepe
   // The structure's own share, |H|^2 F^2 at 650 Hz against the tooth
   // harmonic's at 100 Hz, which the estimate's correction reads (the
   // synthetic channel has no anti-alias filter to undo: cutoff 0).
-  auto h2 = [&](double hz) {
-    const std::complex<double> jw(0, 2 * std::numbers::pi * hz);
-    std::complex<double> h = 0;
-    for (int i = 0; i < p.vibration_mode_count; ++i) {
-      const auto& m = p.vibration_modes[i];
-      const double wn = m.natural_frequency_rad_s;
-      h += wn * wn / m.stiffness_n_per_mm / (jw * jw + 2 * m.damping_ratio * wn * jw + wn * wn);
-    }
-    return std::norm(h);
-  };
+  auto h2 = [&](double hz) { return structure_gain_squared(p, hz); };
   const double own = h2(650) / (h2(650) + h2(100));  // both 150 N
   EXPECT_NEAR(flip.back(), own, 0.02 * own);
   EdgeParameters no_rule = p;
@@ -1833,6 +1855,51 @@ TEST(AutomaticChatterDetector, APeriodDoublingIsChatterThoughEveryRevolutionRepe
   EXPECT_EQ(run(p, 0, 50, &f3, &q3), -1) << "runout is no period doubling";
   ASSERT_FALSE(f3.empty());
   for (const double x : f3) EXPECT_LT(x, 0.01);
+}
+
+// The same period doubling where a revolution is not a whole number of
+// samples (100.5 at 1194 rpm: revolutions of 100 and 101). The FFT's bins
+// are then not the spindle orders, so E reads each halfway order by its own
+// Fourier sum, as the label does: the 34th order (676 Hz, halfway between
+// the 8th and 9th tooth harmonics) beside the tooth harmonic and its second
+// must read the structure's own share within 2 % in every judged
+// revolution, and E fires on the third. Runout's 3rd and 5th orders, next
+// to the 2nd and 6th, and the tooth harmonics read a share below 0.01.
+TEST(AutomaticChatterDetector, APeriodDoublingBetweenSamplesReadsItsShare) {
+  EdgeParameters p = with_y_modes(params());
+  p.vibration_sensor_cutoff_hz = 0;
+  ASSERT_EQ(p.teeth, 4);
+  const double dt = p.sample_period_s;
+  const double rpm = 60.0 / (100.5 * dt), order_hz = rpm / 60;
+  auto run = [&](const EdgeParameters& q, double doubling_n, double runout_n,
+                 std::vector<double>* flip) {
+    AutomaticChatterDetector e;
+    e.configure(q);
+    double t = 0, phase = 0;
+    for (int r = 0; r < 16; ++r) {
+      const Signals s = orders_revolution(e, rpm, dt, t, phase, [&](auto order, ForceSample& f) {
+        const double orders = runout_n * (order(3, 0.3) + order(5, 1.1));
+        f.f_z_n = 300 + 80 * order(4, 0) + orders;
+        f.f_y_wide_n =
+            400 + 150 * order(4, 0.5) + 60 * order(8, 0.3) + orders + doubling_n * order(34, 0.7);
+      });
+      const int n = s.revolution_samples;
+      EXPECT_TRUE(n == 100 || n == 101) << n;
+      if (s.chatter_vibration_ratio > 0) flip->push_back(s.chatter_vibration_flip);
+      if (s.chatter_detected) return static_cast<int>(flip->size()) - 1;
+    }
+    return -1;
+  };
+  std::vector<double> flip;
+  ASSERT_EQ(run(p, 150, 0, &flip), 2) << "the third judged revolution";
+  const double h34 = 150 * 150 * structure_gain_squared(p, 34 * order_hz);
+  const double own = h34 / (h34 + 150 * 150 * structure_gain_squared(p, 4 * order_hz) +
+                            60 * 60 * structure_gain_squared(p, 8 * order_hz));
+  for (size_t r = 0; r < flip.size(); ++r) EXPECT_NEAR(flip[r], own, 0.02 * own) << r;
+  std::vector<double> runout;
+  EXPECT_EQ(run(p, 0, 50, &runout), -1) << "runout is no period doubling";
+  ASSERT_GE(runout.size(), 10u);
+  for (const double x : runout) EXPECT_LT(x, 0.01);
 }
 
 // The channel's white noise passes through the structure's modes into the

@@ -178,6 +178,9 @@ class AutomaticChatterDetector final : public Module {
   size_t delay_gain_n_ = 0;         // for revolutions of this size,
   double delay_gain_u_ = -1;        // this point between samples
   int delay_gain_half_ = 0;         // and this many taps
+  // The period doubling's orders, each read by its own Fourier sum: per
+  // order its 2 cos(omega T) and Goertzel's two states.
+  std::vector<double> order_twice_cos_, order_s1_, order_s2_;
   static constexpr double kMaxCorrection = 25;
   uint64_t vibration_at_ = 0;        // samples written to it
   uint64_t vibration_run_ = 0;       // of which the last ones in an unbroken run
