@@ -419,11 +419,12 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       // revolution, so q sees it only while it grows (from the first
       // hundredths of a per cent of a stable cut's energy to 0.9 and more of
       // it in the study's full-width cuts, q at 0.02-0.10 meanwhile). Its
-      // share above `flip` in three judged revolutions in a row.
+      // share above `flip` in two judged revolutions in a row (the label's
+      // onset asks for three: E decides on the second of them).
       s.chatter_vibration_flip = last_flip_;
       flip_above_ = last_flip_ > p_.chatter_vibration_flip ? flip_above_ + 1 : 0;
       if (rising || climbing || pausing || net || jumped || steep || confirmed ||
-          q_above_ >= kVibrationConfirm || flip_above_ >= kVibrationConfirm) {
+          q_above_ >= kVibrationConfirm || flip_above_ >= kFlipConfirm) {
         s.chatter_detected = true;
       }
       q3_ = q2_;

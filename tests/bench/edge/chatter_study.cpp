@@ -296,7 +296,7 @@ int main(int argc, char** argv) {
       {"--vibration-level", &EdgeParameters::chatter_vibration_level,
        "q above this in 3 revolutions is chatter"},
       {"--vibration-flip", &EdgeParameters::chatter_vibration_flip,
-       "the estimate's period-doubling share above this in 3 revolutions is chatter"},
+       "the estimate's period-doubling share above this in 2 revolutions is chatter"},
       {"--vibration-backup", &EdgeParameters::chatter_vibration_backup,
        "S above this in 3 revolutions is chatter (the backup)"},
       {"--vibration-noise", &EdgeParameters::vibration_sensor_noise_rms_n,
@@ -490,7 +490,7 @@ int main(int argc, char** argv) {
         "%.0f%%, or rises three times in a row by more than x%.2f each from %.2f to past "
         "%.2f (to past %.2f where S, below, rose by more than x%.2f in each of the last two), "
         "or exceeds %.2f in 3; or when the estimate's share at the spindle orders halfway "
-        "between tooth harmonics (a period doubling) exceeds %.2f in 3; or when S, the "
+        "between tooth harmonics (a period doubling) exceeds %.2f in 2; or when S, the "
         "non-harmonic share of F_z energy, exceeds %.2f in 3",
         shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
         shown.vibration_sensor_noise_rms_n, shown.chatter_vibration_rise,
@@ -748,14 +748,11 @@ int main(int argc, char** argv) {
             }
             if (onset < 0) {
               // E's period-doubling share in a stable cut, as its rule
-              // counts it: the least of three judged revolutions in a row.
-              double a = 0, b = 0;
+              // counts it: the lesser of two judged revolutions in a row.
+              double b = 0;
               for (const auto& r : labelled.revolutions) {
                 const double f = r.chatter_vibration_flip;
-                if (f > 0 && a > 0 && b > 0) {
-                  stable_e_flip = std::max(stable_e_flip, std::min({a, b, f}));
-                }
-                a = b;
+                if (f > 0 && b > 0) stable_e_flip = std::max(stable_e_flip, std::min(b, f));
                 b = f;
               }
             }
@@ -956,7 +953,7 @@ int main(int argc, char** argv) {
         "%.4f (threshold %.2f)\n",
         stable_flip, unstable_flip < HUGE_VAL ? unstable_flip : 0.0, kChatterOnsetFlip);
     std::printf(
-        "E's period-doubling share: in stable cuts at most %.4f (the least of three in a row; "
+        "E's period-doubling share: in stable cuts at most %.4f (the lesser of two in a row; "
         "E's rule %.2f)",
         stable_e_flip, shown.chatter_vibration_flip);
     if (!flip_error.empty()) {

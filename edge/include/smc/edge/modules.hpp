@@ -159,6 +159,7 @@ class AutomaticChatterDetector final : public Module {
   double most_engaged_ = 0;     // and the most it reached since it last rose
   static constexpr double kMaxMeanChange = 0.1;
   static constexpr int kVibrationConfirm = 3;  // `level` and `backup`: revolutions in a row
+  static constexpr int kFlipConfirm = 2;       // `flip`: revolutions in a row
 
   // The vibration estimate: per y mode its exact zero-order-hold
   // discretisation at the sample period and its state (displacement q in mm,
