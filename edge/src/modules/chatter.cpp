@@ -203,12 +203,13 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   // The share of the AC energy at the spindle orders halfway between tooth
   // harmonics (a period doubling, with an even number of teeth). Each such
   // order below the Nyquist frequency is read by its own Fourier sum over
-  // the revolution's samples, as the label reads the mill's: where a
+  // the revolution's samples, as the label reads the mill's (the label's
+  // sums are its own, in runner.cpp: the study compares the two). Where a
   // revolution is not a whole number of samples the FFT's bins are not the
   // spindle orders, and the bins next to them read it at 0.44-1.43 of the
-  // mill's own (edge/CHATTER.md, "Period doubling"). Each is corrected as q's bins are,
-  // less the channel's expected noise (a Fourier sum of n samples of white
-  // noise has the power of a bin).
+  // mill's own (edge/CHATTER.md, "Period doubling"). Each is corrected as
+  // q's bins are, less the channel's expected noise (a Fourier sum of n
+  // samples of white noise has the power of a bin).
   const int teeth = std::max(p_.teeth, 0);
   const double ac = energy - (dc - noise_dc);
   last_flip_ = 0;
