@@ -5,6 +5,7 @@
 #include <complex>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 #include "smc/edge/fractional_delay.hpp"
 #include "smc_config.pb.h"
@@ -105,10 +106,21 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
 // consecutive revolutions: about 0.02-0.05 while the cutter enters the part
 // (the forced vibration changes slowly), growing past 1 in chatter.
 std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s,
-                                               int teeth) {
+                                               int teeth, const std::vector<double>* forced) {
   constexpr double kMinEngagement = 0.05;
   std::vector<RevolutionChange> out;
   if (run.samples.size() < 16) return out;
+  if (forced != nullptr && forced->size() != run.samples.size()) {
+    throw std::invalid_argument("vibration_change: the forced vibration has " +
+                                std::to_string(forced->size()) + " samples, the run " +
+                                std::to_string(run.samples.size()));
+  }
+  // What the label compares from one revolution to the next: v, or the
+  // vibration regeneration adds to the forced one.
+  auto compared = [&](size_t k) {
+    const double v = run.samples[k].vibration_y_mm;
+    return forced != nullptr ? v - (*forced)[k] : v;
+  };
   const double dt = run.samples[1].t_s - run.samples[0].t_s;
   if (!(dt > 0)) return out;
   // The holds that react to chatter: C's, G's, and O's while the spindle changes speed.
@@ -194,7 +206,7 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
           {static_cast<size_t>(FractionalDelay::kMaxHalf), j + 1, run.samples.size() - 1 - j}));
       if (w != delay.fraction() || half != delay.half()) delay.set(w, half);
       const TraceSample& before = run.samples[j];
-      const double v_before = delay.at([&](size_t i) { return run.samples[i].vibration_y_mm; }, j);
+      const double v_before = delay.at(compared, j);
       // A hold or the end of the pass that begins within this revolution
       // (a reaction to it) ends the comparison there; one in force at its
       // start, or in the revolution before, makes it not comparable.
@@ -204,14 +216,14 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
       // LinuxCNC's first periods before the sampler's first record) makes
       // its revolution, and the one that reads it as the one before, not
       // comparable; the rest of the trace is judged.
-      if (std::isnan(now.vibration_y_mm) || std::isnan(v_before)) {
+      if (std::isnan(compared(k)) || std::isnan(v_before)) {
         ok = false;
         continue;
       }
       ok = ok && !stopped && before.in_pass && now.engagement > kMinEngagement &&
            before.engagement > kMinEngagement && now.engagement >= before.engagement &&
            (before.active & hold) == 0;
-      const double d = now.vibration_y_mm - v_before;
+      const double d = compared(k) - v_before;
       diff += d * d;
       energy += now.vibration_y_mm * now.vibration_y_mm;
     }
@@ -220,6 +232,31 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
     if (c.comparable && doubling) c.flip = halfway_share(r);
   }
   mark_onsets(out);
+  return out;
+}
+
+std::vector<double> forced_vibration(const RunResult& run, Drive& twin) {
+  std::vector<double> out;
+  out.reserve(run.samples.size());
+  DriveSample d;
+  // The core steps the drive with the command of the tick before (none
+  // before the first), and the trace keeps each tick's new command.
+  double command = 0;
+  for (size_t k = 0; k < run.samples.size(); ++k) {
+    const TraceSample& s = run.samples[k];
+    if (twin.step(command, d) != Status::kOk || std::abs(d.x_mm - s.x_mm) > 1e-6 ||
+        d.pass_index != s.pass_index || d.in_pass != s.in_pass) {
+      throw std::runtime_error(
+          "forced_vibration: at sample " + std::to_string(k) + " (t = " + std::to_string(s.t_s) +
+          " s) the twin is at x = " + std::to_string(d.x_mm) + " mm, pass " +
+          std::to_string(d.pass_index) + ", the run at x = " + std::to_string(s.x_mm) +
+          " mm, pass " + std::to_string(s.pass_index) +
+          ": only a run with its program and spindle speed as loaded, "
+          "every sample kept, can be replayed");
+    }
+    out.push_back(d.vibration_y_mm);
+    command = s.feedrate_mm_s;
+  }
   return out;
 }
 

@@ -12,7 +12,7 @@
 //       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-flip X]
 //       [--vibration-backup X]
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
-//       [--sample-period S] [--mill-model FILE] [--no-regeneration]
+//       [--sample-period S] [--mill-model FILE] [--no-regeneration] [--twin-label]
 //
 // --help lists every flag with what it does and its default.
 //
@@ -60,7 +60,12 @@
 // cuts every chip at its nominal thickness (simulation.no_regeneration), so
 // no cut can chatter and the vibration is the forced response alone: every
 // onset the label finds then is one it should not, and every detection a
-// false one. After the tables: the unstable
+// false one. --twin-label: each labelling run's feed is replayed on the same
+// mill without regeneration (forced_vibration, smc/edge/runner.hpp), and
+// the label's q is of what regeneration adds to the vibration, v less the
+// twin's, over RMS(v) (the mill's q in the figures below is that q too):
+// a forced vibration that changes in the entry is no onset on it. After
+// the tables: the unstable
 // cuts E caught late or missed, each with the mill's own q around its onset
 // (how long it stayed above the onset's threshold, and how high it went
 // after); the unstable cuts E detected before the label's onset (within 3
@@ -256,6 +261,7 @@ int main(int argc, char** argv) {
   int confirm_override = 0;
   bool force_only = false;
   bool no_regeneration = false;
+  bool twin_label = false;
   double channel_noise = -1;  // < 0: the configuration's
   double wide_cutoff = -1;    // < 0: the configuration's
   double sample_period = -1;  // < 0: the configuration's
@@ -322,6 +328,10 @@ int main(int argc, char** argv) {
   app.add_flag("--no-regeneration", no_regeneration,
                "the mill cuts every chip at its nominal thickness: no cut can chatter, every "
                "onset and detection is a false one");
+  app.add_flag("--twin-label", twin_label,
+               "label each cut on what regeneration adds to its vibration: its labelling run's "
+               "feed replayed on the same mill without regeneration, and the label's q of the "
+               "difference (the mill's q in the figures below is that q too)");
   app.add_option("--threshold", threshold_override,
                  "S's threshold (alone; 1 or more switches E's rules off in both runs, and each "
                  "cut runs once)")
@@ -511,14 +521,16 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "; band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms, a sample every %.2f ms; "
-      "programmed %.2f mm/tooth, %d seeds; the mill: %s%s\n\n",
+      "programmed %.2f mm/tooth, %d seeds; the mill: %s%s; labelled on %s\n\n",
       base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
       base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(),
       1000 * shown.sample_period_s, fpt, seeds,
       mill_model_file.empty() ? "the configuration's model" : mill_model_file.c_str(),
       no_regeneration ? ", without regeneration (no cut can chatter: every onset the label "
                         "finds is the forced response's)"
-                      : "");
+                      : "",
+      twin_label ? "what regeneration adds to the vibration (the cut replayed without it)"
+                 : "the mill's vibration");
   std::printf("%6s %6s %6s %8s %6s %9s %8s %8s %8s %8s %8s %9s %8s %10s\n", "rpm", "width",
               "runout", "crit_mm", "runs", "stable", "revs", "S_above", "false", "max_S", "max_q",
               "unstable", "within3", "delay_rev");
@@ -601,13 +613,35 @@ int main(int argc, char** argv) {
             const auto label = cut(raw, mill_msg, false, labelled);
             const auto s = e_muted ? label : cut(raw, mill_msg, true, heard);
             const RunResult& run = e_muted ? labelled : heard;
-            const double onset = label.chatter_onset_s();
+            // --twin-label: the same cut on the mill without regeneration,
+            // fed as the labelling run was, and the label on what
+            // regeneration adds to the vibration.
+            std::vector<double> forced;
+            if (twin_label) {
+              auto twin_sim = raw.simulation();
+              twin_sim.set_no_regeneration(true);
+              const EdgeConfig twin_cfg = edge_config_from_proto(raw);
+              SimulatedMill twin(mill_msg, twin_sim, twin_cfg.params.sample_period_s);
+              twin.load(twin_cfg.program);
+              forced = forced_vibration(labelled, twin);
+            }
+            const auto changes = vibration_change(labelled, still_period_s,
+                                                  static_cast<int>(raw.operation().teeth()),
+                                                  twin_label ? &forced : nullptr);
+            double onset = label.chatter_onset_s();
+            if (twin_label) {
+              onset = -1;
+              for (const auto& change : changes) {
+                if (change.onset()) {
+                  onset = labelled.samples[change.first_sample].t_s;
+                  break;
+                }
+              }
+            }
             const double first_detection = s.chatter_detected_s();
             bool premature = false;  // before the onset: a false detection
             ++run_id;
             {
-              const auto changes = vibration_change(labelled, still_period_s,
-                                                    static_cast<int>(raw.operation().teeth()));
               LabelledCut& kept = labelled_cuts.emplace_back();
               kept.rpm = rpm;
               kept.onset_s = onset;

@@ -1118,3 +1118,99 @@ TEST(ChatterLabel, APeriodDoublingIsChatterThoughEveryRevolutionRepeats) {
     }
   }
 }
+
+// The label on what regeneration adds (the detector study's --twin-label):
+// a forced vibration that changes as chatter's first revolutions do (q
+// 0.2, 0.3, 0.4) is, with the twin's own vibration taken out, no change;
+// a vibration between spindle orders that grows on top of it is still an
+// onset, once it has grown.
+TEST(ChatterLabel, WhatTheForcedVibrationExplainsIsNoChange) {
+  const double rpm = 1500;
+  std::vector<double> q(20, 0.0);
+  q[3] = 0.2;
+  q[4] = 0.3;
+  q[5] = 0.4;
+  const RunResult forced_run = scaled_revolutions(q, rpm, 80);
+  std::vector<double> forced;
+  for (const TraceSample& s : forced_run.samples) forced.push_back(s.vibration_y_mm);
+  const auto alone = vibration_change(forced_run, 0.04, 4);
+  const auto explained = vibration_change(forced_run, 0.04, 4, &forced);
+  ASSERT_EQ(alone.size(), explained.size());
+  bool onset_alone = false;
+  for (size_t r = 0; r < alone.size(); ++r) {
+    onset_alone = onset_alone || alone[r].onset();
+    EXPECT_EQ(explained[r].q, 0) << r;
+    EXPECT_FALSE(explained[r].onset()) << r;
+    EXPECT_EQ(explained[r].comparable, alone[r].comparable) << r;
+  }
+  EXPECT_TRUE(onset_alone) << "on v alone the changing forced vibration is an onset";
+
+  // Chatter at 27.3 spindle orders, growing by 40 % a revolution from the
+  // seventh on (a twelfth of the forced vibration's size there), added to
+  // the forced vibration.
+  RunResult chattering = forced_run;
+  for (TraceSample& s : chattering.samples) {
+    const double revs = s.t_s * rpm / 60;
+    if (revs >= 6) {
+      s.vibration_y_mm += 0.2 * std::pow(1.4, revs - 6) * spindle_order(rpm, 27.3, 0.3, s.t_s);
+    }
+  }
+  const auto added = vibration_change(chattering, 0.04, 4, &forced);
+  size_t onset = added.size();
+  for (size_t r = 0; r < added.size() && onset == added.size(); ++r) {
+    if (added[r].onset()) onset = r;
+  }
+  ASSERT_LT(onset, added.size()) << "the chatter is an onset";
+  EXPECT_GE(onset, 7u) << "not before it grows";
+  const std::vector<double> wrong(forced.size() - 1, 0.0);
+  EXPECT_THROW((void)vibration_change(chattering, 0.04, 4, &wrong), std::invalid_argument);
+}
+
+// The study's twin replays the labelling run's feed: on the same mill the
+// paper's SMC I run comes back sample for sample; on the mill without
+// regeneration its vibration is the forced one, and a label on what
+// regeneration adds finds no onset in this stable cut. A run whose program
+// was rewritten (the paper's SMC II: E adds a pass) cannot be replayed, and
+// says where it parts.
+TEST(ChatterLabel, ARunsFeedReplayedOnItsOwnMillComesBackSampleForSample) {
+  const auto smc1 = run_paper("smc1.textproto");
+  ASSERT_TRUE(smc1->run.completed);
+  const EdgeConfig cfg = edge_config_from_proto(smc1->raw);
+  {
+    SimulatedMill same(smc1->raw.milling_model(), smc1->raw.simulation(),
+                       cfg.params.sample_period_s);
+    same.load(cfg.program);
+    const auto again = forced_vibration(smc1->run, same);
+    ASSERT_EQ(again.size(), smc1->run.samples.size());
+    for (size_t k = 0; k < again.size(); ++k) {
+      ASSERT_EQ(again[k], smc1->run.samples[k].vibration_y_mm) << k;
+    }
+  }
+  auto sim = smc1->raw.simulation();
+  sim.set_no_regeneration(true);
+  SimulatedMill twin(smc1->raw.milling_model(), sim, cfg.params.sample_period_s);
+  twin.load(cfg.program);
+  const auto forced = forced_vibration(smc1->run, twin);
+  size_t differ = 0;
+  for (size_t k = 0; k < forced.size(); ++k) {
+    if (smc1->run.samples[k].contact && forced[k] != smc1->run.samples[k].vibration_y_mm) ++differ;
+  }
+  EXPECT_GT(differ, 1000u) << "regeneration changes the vibration in the cut";
+  const auto added =
+      vibration_change(smc1->run, cfg.params.slow_period_s, cfg.params.teeth, &forced);
+  ASSERT_GT(added.size(), 100u);
+  for (const auto& c : added) EXPECT_FALSE(c.onset());
+
+  const auto smc2 = run_paper("smc2.textproto");
+  ASSERT_GT(smc2->summary.program_rewrites(), 0u);
+  const EdgeConfig cfg2 = edge_config_from_proto(smc2->raw);
+  SimulatedMill replayed(smc2->raw.milling_model(), smc2->raw.simulation(),
+                         cfg2.params.sample_period_s);
+  replayed.load(cfg2.program);
+  try {
+    (void)forced_vibration(smc2->run, replayed);
+    ADD_FAILURE() << "a rewritten run replayed";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("at sample"), std::string::npos) << e.what();
+  }
+}

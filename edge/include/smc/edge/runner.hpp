@@ -96,6 +96,13 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run);
 //
 // The onset is the first revolution whose onset level exceeds
 // kChatterOnsetQ or whose flip onset level exceeds kChatterOnsetFlip.
+//
+// With `forced` (one value per sample of the run: the vibration of the same
+// cut on a mill without regeneration, fed the same way; forced_vibration),
+// q is of the vibration regeneration adds, v - forced, still over RMS(v_k):
+// the change from one revolution to the next that the forced vibration does
+// not explain. The detector study's --twin-label; the summary's onset does
+// not use it.
 struct RevolutionChange {
   size_t first_sample = 0, end_sample = 0;  // [first, end) in RunResult::samples
   double q = 0;
@@ -111,7 +118,16 @@ inline bool RevolutionChange::onset() const noexcept {
   return onset_level > kChatterOnsetQ || flip_onset_level > kChatterOnsetFlip;
 }
 std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s,
-                                               int teeth = 0);
+                                               int teeth = 0,
+                                               const std::vector<double>* forced = nullptr);
+// The vibration of `run`'s cut replayed on `twin`: the feed the core
+// commanded at each sample of the run (kept with every sample, the trace
+// not decimated) applied to `twin`, a drive that has loaded `program` and
+// not stepped yet, one value per sample. Throws std::runtime_error naming
+// the sample where the twin's position or pass parts from the run's (a run
+// whose program was rewritten, or a spindle speed changed, cannot be
+// replayed so). Not real-time.
+std::vector<double> forced_vibration(const RunResult& run, Drive& twin);
 // Sets each revolution's onset_level and flip_onset_level from the q, flip
 // and comparable of the revolutions around it (the rules above;
 // vibration_change calls it). The
