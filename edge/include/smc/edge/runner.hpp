@@ -122,8 +122,8 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
                                                const std::vector<double>* forced = nullptr);
 // The vibration of `run`'s cut replayed on `twin`: the feed the core
 // commanded at each sample of the run (kept with every sample, the trace
-// not decimated) applied to `twin`, a drive that has loaded `program` and
-// not stepped yet, one value per sample. Throws std::runtime_error naming
+// not decimated) applied to `twin`, a drive that has loaded the run's
+// program and not stepped yet; one value per sample. Throws std::runtime_error naming
 // the sample where the twin's position or pass parts from the run's (a run
 // whose program was rewritten, or a spindle speed changed, cannot be
 // replayed so). Not real-time.
