@@ -260,6 +260,13 @@ std::vector<double> forced_vibration(const RunResult& run, Drive& twin) {
   return out;
 }
 
+double first_onset_s(const RunResult& run, const std::vector<RevolutionChange>& changes) {
+  for (const RevolutionChange& c : changes) {
+    if (c.onset()) return run.samples[c.first_sample].t_s;
+  }
+  return -1;
+}
+
 void mark_onsets(std::vector<RevolutionChange>& out) {
   const size_t revs = out.size();
   for (RevolutionChange& c : out) c.onset_level = c.flip_onset_level = 0;
@@ -294,17 +301,6 @@ void mark_onsets(std::vector<RevolutionChange>& out) {
     out[r].flip_onset_level = level;
   }
 }
-
-namespace {
-
-double chatter_onset(const RunResult& run, double still_period_s, int teeth) {
-  for (const RevolutionChange& c : vibration_change(run, still_period_s, teeth)) {
-    if (c.onset()) return run.samples[c.first_sample].t_s;
-  }
-  return -1;
-}
-
-}  // namespace
 
 smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
   smc::config::RunSummary sum;
@@ -478,7 +474,7 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
     if ((r.active & bit(ModuleId::C)) != 0) hold_s += r.period_s;
   }
   sum.set_feed_hold_s(hold_s);
-  const double onset = chatter_onset(run, p.slow_period_s, p.teeth);
+  const double onset = first_onset_s(run, vibration_change(run, p.slow_period_s, p.teeth));
   sum.set_chatter_onset_s(onset);
   sum.set_detection_delay_s(onset >= 0 && detected_t >= 0 ? detected_t - onset : -1);
   return sum;

@@ -628,16 +628,8 @@ int main(int argc, char** argv) {
             const auto changes = vibration_change(labelled, still_period_s,
                                                   static_cast<int>(raw.operation().teeth()),
                                                   twin_label ? &forced : nullptr);
-            double onset = label.chatter_onset_s();
-            if (twin_label) {
-              onset = -1;
-              for (const auto& change : changes) {
-                if (change.onset()) {
-                  onset = labelled.samples[change.first_sample].t_s;
-                  break;
-                }
-              }
-            }
+            const double onset =
+                twin_label ? first_onset_s(labelled, changes) : label.chatter_onset_s();
             const double first_detection = s.chatter_detected_s();
             bool premature = false;  // before the onset: a false detection
             ++run_id;

@@ -120,13 +120,16 @@ inline bool RevolutionChange::onset() const noexcept {
 std::vector<RevolutionChange> vibration_change(const RunResult& run, double still_period_s,
                                                int teeth = 0,
                                                const std::vector<double>* forced = nullptr);
+// The time of the first revolution of `changes` (vibration_change of `run`)
+// that is the onset; -1: none. The summary's chatter onset is this.
+double first_onset_s(const RunResult& run, const std::vector<RevolutionChange>& changes);
 // The vibration of `run`'s cut replayed on `twin`: the feed the core
 // commanded at each sample of the run (kept with every sample, the trace
 // not decimated) applied to `twin`, a drive that has loaded the run's
-// program and not stepped yet; one value per sample. Throws std::runtime_error naming
-// the sample where the twin's position or pass parts from the run's (a run
-// whose program was rewritten, or a spindle speed changed, cannot be
-// replayed so). Not real-time.
+// program and not stepped yet; one value per sample. Throws
+// std::runtime_error naming the sample where the twin's position or pass
+// parts from the run's (a run whose program was rewritten, or a spindle
+// speed changed, cannot be replayed so). Not real-time.
 std::vector<double> forced_vibration(const RunResult& run, Drive& twin);
 // Sets each revolution's onset_level and flip_onset_level from the q, flip
 // and comparable of the revolutions around it (the rules above;
