@@ -24,8 +24,9 @@ cmake --preset ci >/dev/null
 cmake --build --preset ci
 
 echo "== tests"
-# In the order a clean checkout runs them (CI's): ctest would otherwise
-# start the slowest of the last run first, all together.
+# In the order a clean checkout runs them (CI's), by the tests' COST
+# properties (tests/README.md, "Order"): ctest would otherwise start the
+# slowest of the last run first, all together.
 rm -f build/release/Testing/Temporary/CTestCostData.txt
 ctest --preset ci "$@"
 
