@@ -1001,11 +1001,22 @@ TEST_F(LinuxCncDyno, TheLoopOnLinuxCncNeverAllocates) {
 // 0.357), while E's vibration estimate reads it as the repeating cut it is.
 class LinuxCncRunout : public LinuxCncDyno {
  protected:
-  void SetUp() override {
+  void SetUp() override { start(1); }
+  // The wideband channel sampled `wide_per_tick` times a servo period by
+  // the dynamometer, and expected so by E.
+  void start(int wide_per_tick) {
     dir_ = std::filesystem::temp_directory_path() / ("smc-lcnr-" + std::to_string(getpid()));
     std::filesystem::create_directories(dir_);
     ::chmod(dir_.c_str(), 0777);
     auto c = smc::documents::load_supervisor_config(src("edge/configs/smc2.textproto"));
+    if (wide_per_tick > 1) {
+      c.mutable_simulation()->set_f_y_wide_samples_per_tick(static_cast<uint32_t>(wide_per_tick));
+      c.mutable_simulation()->set_f_y_wide_cutoff_hz(3500);
+      c.mutable_simulation()->set_f_y_wide_order(8);
+      c.mutable_operation()->set_wideband_samples_per_tick(static_cast<uint32_t>(wide_per_tick));
+      c.mutable_operation()->set_wideband_cutoff_hz(3500);
+      c.mutable_operation()->set_wideband_filter_order(8);
+    }
     auto* model = c.mutable_milling_model();
     model->mutable_workpiece()->set_width_mm(25);
     for (const double r :
@@ -1065,6 +1076,49 @@ TEST_F(LinuxCncRunout, TheWidebandChannelKeepsRunoutFromReadingAsChatter) {
               alone.chatter_events(), alone.chatter_detected_s(), alone_q.revolutions);
   EXPECT_EQ(alone_q.revolutions, 0);
   EXPECT_GE(alone.chatter_events(), 1u) << "S alone should read this runout as chatter";
+}
+
+// The same cut with the dynamometer's wideband channel sampled five times a
+// servo period (10 kHz, through an eighth-order filter at 3.5 kHz): the
+// sampler carries the period's five samples (smc-force-y-wide-sub-0..3,
+// smc-force-y-wide and their count), E estimates the vibration at that
+// rate on LinuxCNC too (a count other than the configuration's would hold
+// the feed), and the cut is stable. The configuration's edge, told one
+// sample a period, refuses the faster channel: E's error holds the feed.
+class LinuxCncWideband : public LinuxCncRunout {
+ protected:
+  void SetUp() override { start(5); }
+};
+
+TEST_F(LinuxCncWideband, FiveSamplesAPeriodReachModuleE) {
+  int st = -1;
+  const std::string samples = as_mill("halcmd getp smc-dyno.wide-samples", &st);
+  ASSERT_EQ(st, 0) << samples;
+  EXPECT_EQ(std::atoi(samples.c_str()), 5) << samples;
+  const cfg::RunSummary fast = cut("fast");
+  const EstimateSeen q = estimate_seen((dir_ / "fast" / "revolutions.csv").string());
+  std::printf(
+      "the channel at 10 kHz on LinuxCNC: chatter events %u, faults %d, E's estimate in %d "
+      "revolutions, median q %.3f\n",
+      fast.chatter_events(), fast.faults_size(), q.revolutions, q.median_q);
+  EXPECT_GT(q.revolutions, 250);  // of about 320 in the cut
+  EXPECT_EQ(fast.chatter_events(), 0u) << "runout read as chatter";
+  EXPECT_EQ(fast.faults_size(), 0) << smc::documents::to_json(fast);
+  // An edge that expects one sample a period gets five: E fails, the feed
+  // is held, and the run's summary names the module's error.
+  auto c = smc::documents::load_supervisor_config(config_);
+  c.mutable_operation()->set_wideband_samples_per_tick(1);
+  std::string text;
+  ASSERT_TRUE(google::protobuf::TextFormat::PrintToString(c, &text));
+  const std::string once = write("once.textproto", text);
+  const std::string out = simulate(once, "once", &st, 15);
+  EXPECT_EQ(st, 3) << "held until the time limit: " << out;
+  cfg::RunSummary held;
+  smc::documents::load((dir_ / "once" / "summary.json").string(), held);
+  ASSERT_EQ(held.faults_size(), 1) << smc::documents::to_json(held);
+  std::printf("told one sample a period: exit %d, fault '%s'\n", st, held.faults(0).c_str());
+  EXPECT_NE(held.faults(0).find("module error in module E"), std::string::npos) << held.faults(0);
+  EXPECT_EQ(held.chatter_events(), 0u);
 }
 
 TEST_F(LinuxCncDyno, AMachineNotHomedIsRefusedBeforeAnythingMoves) {

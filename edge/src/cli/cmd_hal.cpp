@@ -67,12 +67,13 @@ void add_hal(CLI::App& app) {
         "{\"records\": %llu, \"lost\": %llu, \"repeated\": %llu, \"overruns\": %d, "
         "\"max_backlog\": %d, \"wall_s\": %.3f, \"x_min_mm\": %.4f, \"x_max_mm\": %.4f, "
         "\"spindle_revs\": %.3f, \"last_velocity_mm_s\": %.4f, \"wideband_fy\": %s, "
-        "\"complete\": %s}\n",
+        "\"wideband_samples\": %d, \"complete\": %s}\n",
         static_cast<unsigned long long>(s->records()), static_cast<unsigned long long>(s->lost()),
         static_cast<unsigned long long>(s->repeated()), s->overruns(), backlog_max, wall,
         s->records() > 0 ? x_min : 0.0, s->records() > 0 ? x_max : 0.0,
         s->records() > 0 ? r.spindle_revs - first.spindle_revs : 0.0,
         s->records() > 0 ? r.velocity_mm_s : 0.0, r.fy_wide_present ? "true" : "false",
+        r.fy_wide_present ? std::max(1, static_cast<int>(r.fy_wide_samples)) : 0,
         complete ? "true" : "false");
     if (!complete) throw Failure(1, "timed out after " + std::to_string(args->timeout_s) + " s");
     if (s->lost() > 0 || s->repeated() > 0) {

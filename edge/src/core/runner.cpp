@@ -361,7 +361,11 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
         done_t = e.t_s;
         break;
       case EventKind::kFault:
-        sum.add_faults(std::string(to_string(e.fault)) + " at t=" + std::to_string(e.t_s) + " s");
+        sum.add_faults(std::string(to_string(e.fault)) +
+                       (e.fault == Fault::kModuleError && e.module >= 0
+                            ? std::string(" in module ") + letter(static_cast<ModuleId>(e.module))
+                            : std::string()) +
+                       " at t=" + std::to_string(e.t_s) + " s");
         break;
       default:
         break;

@@ -50,6 +50,10 @@ struct SimulatedMill::Impl {
   // before it, as they were.
   std::mt19937_64 rng_wide;
   std::normal_distribution<double> noise_wide{0.0, 1.0};
+  // The wideband channel's samples per sample period (the filter's output
+  // every `wide_stride` internal steps); 1: with the loop.
+  int wide_per_tick = 1;
+  std::size_t wide_stride = 0;
   // Depth already removed by earlier passes, per bin along the part (mm).
   std::vector<double> removed;
   double bin_mm = 0.25;
@@ -169,6 +173,16 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
   }
   s.rpm_step = accel * sample_period_s;
   const auto steps = static_cast<std::size_t>(s.sim.steps_per_sample());
+  const auto per_tick = sim.f_y_wide_samples_per_tick() == 0 ? 1U : sim.f_y_wide_samples_per_tick();
+  if (per_tick > static_cast<unsigned>(ForceSample::kMaxWideSamples) || steps % per_tick != 0) {
+    throw ConfigError("simulation.f_y_wide_samples_per_tick: " + std::to_string(per_tick) +
+                      " samples do not divide the simulator's " + std::to_string(steps) +
+                      " internal steps per sample period evenly (at most " +
+                      std::to_string(ForceSample::kMaxWideSamples) +
+                      "); fix: 0 or 1 for one a period, or a divisor such as 2 or 5");
+  }
+  s.wide_per_tick = static_cast<int>(per_tick);
+  s.wide_stride = steps / per_tick;
   s.trace_x.assign(steps, 0.0);
   s.trace_y.assign(steps, 0.0);
   s.trace_z.assign(steps, 0.0);
@@ -304,11 +318,16 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   uint32_t status = 0;
   double fx = 0, fy = 0, fz = 0, fy_wide = 0;
   status |= s.sim.step(in, smp, {s.trace_x.data(), s.trace_y.data(), s.trace_z.data()});
+  // The wideband channel's samples of this period, at the end of each
+  // stride (one stride, the whole period, when it samples with the loop).
+  double wide[ForceSample::kMaxWideSamples] = {};
+  int wide_n = 0;
   for (std::size_t k = 0; k < s.trace_x.size(); ++k) {
     fx = s.lp_x(s.trace_x[k]);
     fy = s.lp_y(s.trace_y[k]);
     fz = s.lp_z(s.trace_z[k]);
     fy_wide = s.lp_y_wide(s.trace_y[k]);
+    if ((k + 1) % s.wide_stride == 0) wide[wide_n++] = fy_wide;
   }
   s.time_s += period_s_;
   if (smp.teeth_in_cut > 0) s.cut_length_mm += in.feedrate_mm_s * period_s_;
@@ -317,10 +336,14 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
     fx += sigma * s.noise(s.rng);
     fy += sigma * s.noise(s.rng);
     fz += sigma * s.noise(s.rng);
-    fy_wide += sigma * s.noise_wide(s.rng_wide);
+    for (int i = 0; i < wide_n; ++i) wide[i] += sigma * s.noise_wide(s.rng_wide);
   }
   const double x = s.sim.tool_position_mm();
-  out.force = ForceSample{s.time_s, fx, fy, fz, fy_wide};
+  out.force = ForceSample{s.time_s, fx, fy, fz, wide[wide_n - 1]};
+  if (s.wide_per_tick > 1) {
+    out.force.wide_count = wide_n;
+    std::copy(wide, wide + wide_n, out.force.f_y_wide_sub_n);
+  }
   out.spindle_rpm = s.rpm_now;
   out.depth_mm = spec.depth_mm;
   out.programmed_feedrate_mm_s = spec.feedrate_mm_s;

@@ -36,29 +36,41 @@ void AutomaticChatterDetector::configure(const EdgeParameters& p) {
   for (int n = fewest; n <= static_cast<int>(most); ++n) {
     fft_->fft.fwd(spectrum_.data(), buffer_.data(), n);
   }
-  // The vibration estimate: each y mode discretised exactly at the sample
-  // period (as the simulated mill discretises its own structure); a ring
-  // holding this revolution and the one before, at the slowest supervised
-  // speed, with room for the fractional delay's taps.
+  // The vibration estimate: each y mode discretised exactly at the wideband
+  // channel's sample period (as the simulated mill discretises its own
+  // structure; the loop's, or a fraction of it where the channel samples
+  // faster); a ring holding this revolution and the one before, at the
+  // slowest supervised speed, with room for the fractional delay's taps.
+  per_tick_ =
+      std::clamp(p.vibration_samples_per_tick, 1, EdgeParameters::kMaxVibrationSamplesPerTick);
+  channel_period_s_ = p.sample_period_s / per_tick_;
   mode_count_ = 0;
   for (int i = 0; i < std::min(p.vibration_mode_count, EdgeParameters::kMaxVibrationModes); ++i) {
     const auto& m = p.vibration_modes[i];
     const auto d = machining::discretise(
         machining::Mode{m.natural_frequency_rad_s, m.damping_ratio, m.stiffness_n_per_mm},
-        p.sample_period_s);
+        channel_period_s_);
     VibrationMode& v = modes_[static_cast<size_t>(mode_count_++)];
     v = VibrationMode{d.p11, d.p12, d.p21, d.p22, d.g1, d.g2, 0, 0};
   }
-  vibration_.assign(mode_count_ > 0 ? 2 * most + 2 * FractionalDelay::kMaxHalf + 4 : 0, 0.0);
-  vibration_buffer_.assign(mode_count_ > 0 ? most : 0, 0.0);
-  vibration_spectrum_.assign(mode_count_ > 0 ? 2 * (most / 2 + 1) : 0, {});
-  delay_gain_.assign(mode_count_ > 0 ? most / 2 + 1 : 0, 1.0);
+  const size_t wide_most = most * static_cast<size_t>(per_tick_);
+  vibration_.assign(mode_count_ > 0 ? 2 * wide_most + 2 * FractionalDelay::kMaxHalf + 4 : 0, 0.0);
+  vibration_buffer_.assign(mode_count_ > 0 ? wide_most : 0, 0.0);
+  vibration_spectrum_.assign(mode_count_ > 0 ? 2 * (wide_most / 2 + 1) : 0, {});
+  delay_gain_.assign(mode_count_ > 0 ? wide_most / 2 + 1 : 0, 1.0);
   // At most one order a bin below the Nyquist frequency (the slowest
-  // speed's revolution has `most` samples).
-  const size_t orders = mode_count_ > 0 ? most / 2 + 1 : 0;
+  // speed's revolution has `wide_most` samples).
+  const size_t orders = mode_count_ > 0 ? wide_most / 2 + 1 : 0;
   order_twice_cos_.assign(orders, 0.0);
   order_s1_.assign(orders, 0.0);
   order_s2_.assign(orders, 0.0);
+  // The estimate's revolutions at the channel's rate: their plans too,
+  // the largest last.
+  if (mode_count_ > 0 && per_tick_ > 1) {
+    for (int n = fewest; n <= static_cast<int>(most); ++n) {
+      fft_->fft.fwd(vibration_spectrum_.data(), vibration_buffer_.data(), n * per_tick_);
+    }
+  }
   delay_gain_n_ = 0;
   reset();
 }
@@ -82,23 +94,35 @@ Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
     buffer_[static_cast<size_t>(filled_++)] = s.sample.f_z_n;
   }
   if (mode_count_ == 0) return Status::kOk;
-  const double f = s.sample.f_y_wide_n;
-  if (!std::isfinite(f)) {
+  const ForceSample& in = s.sample;
+  if (!std::isfinite(in.f_y_wide_n)) {
     vibration_run_ = 0;  // a gap: the comparison starts again
     return Status::kOk;
   }
-  wide_channel_ = true;
-  double v = 0;
-  for (int i = 0; i < mode_count_; ++i) {
-    VibrationMode& m = modes_[static_cast<size_t>(i)];
-    const double q = m.p11 * m.q + m.p12 * m.w + m.g1 * f;
-    m.w = m.p21 * m.q + m.p22 * m.w + m.g2 * f;
-    m.q = q;
-    v += q;
+  // The channel's samples of this period: as many as the configuration
+  // says it brings (operation.wideband_samples_per_tick), or the drive and
+  // E disagree on its rate, and the estimate would be wrong: an error (the
+  // core holds the feed).
+  if (per_tick_ > 1 ? in.wide_count != per_tick_ : in.wide_count > 1) return Status::kError;
+  const double* f = per_tick_ > 1 ? in.f_y_wide_sub_n : &in.f_y_wide_n;
+  for (int j = 0; j < per_tick_; ++j) {
+    if (!std::isfinite(f[j])) {
+      vibration_run_ = 0;
+      return Status::kOk;
+    }
+    double v = 0;
+    for (int i = 0; i < mode_count_; ++i) {
+      VibrationMode& m = modes_[static_cast<size_t>(i)];
+      const double q = m.p11 * m.q + m.p12 * m.w + m.g1 * f[j];
+      m.w = m.p21 * m.q + m.p22 * m.w + m.g2 * f[j];
+      m.q = q;
+      v += q;
+    }
+    vibration_[static_cast<size_t>(vibration_at_ % vibration_.size())] = v;
+    ++vibration_at_;
+    ++vibration_run_;
   }
-  vibration_[static_cast<size_t>(vibration_at_ % vibration_.size())] = v;
-  ++vibration_at_;
-  ++vibration_run_;
+  wide_channel_ = true;
   return Status::kOk;
 }
 
@@ -107,7 +131,7 @@ double AutomaticChatterDetector::vibration_correction(double frequency_hz,
   using C = std::complex<double>;
   const double omega = 2 * std::numbers::pi * frequency_hz;
   const C s(0, omega);
-  const C z = std::polar(1.0, omega * p_.sample_period_s);
+  const C z = std::polar(1.0, omega * channel_period_s_);
   C held = 0, structure = 0;
   for (int i = 0; i < mode_count_; ++i) {
     const VibrationMode& m = modes_[static_cast<size_t>(i)];
@@ -133,6 +157,9 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   const double nan = std::numeric_limits<double>::quiet_NaN();
   last_flip_ = 0;
   if (mode_count_ == 0 || samples < 4 || !(period_samples >= 1)) return nan;
+  // In the channel's samples (per_tick_ of them a sample period).
+  samples *= per_tick_;
+  period_samples *= per_tick_;
   if (static_cast<size_t>(samples) > vibration_buffer_.size()) return nan;
   // This revolution and the one before, back to the sample before the first
   // one it interpolates, must lie in the unbroken run and in the ring.
@@ -166,7 +193,7 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   fft_->fft.fwd(now, vibration_buffer_.data(), static_cast<Eigen::Index>(n));
   // Both energies by Parseval, each bin corrected from what the estimate
   // passes to what the structure does at that frequency.
-  const double df = 1.0 / (static_cast<double>(n) * p_.sample_period_s);
+  const double df = 1.0 / (static_cast<double>(n) * channel_period_s_);
   const double noise = p_.vibration_sensor_noise_rms_n;
   const double noise_bin = static_cast<double>(n) * noise * noise;
   double changed = 0, energy = 0, noise_changed = 0, noise_energy = 0;
@@ -180,7 +207,7 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
     delay_gain_half_ = delay_.half();
     for (size_t k = 0; k < bins; ++k) {
       delay_gain_[k] = delay_.gain_squared(2 * std::numbers::pi * static_cast<double>(k) * df *
-                                           p_.sample_period_s);
+                                           channel_period_s_);
     }
   }
   for (size_t k = 0; k < bins; ++k) {
@@ -215,8 +242,8 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
   last_flip_ = 0;
   if (teeth >= 2 && teeth % 2 == 0 && ac > 0) {
     const double mean = now[0].real() / static_cast<double>(n);
-    const double order_hz = 1.0 / (period_samples * p_.sample_period_s);
-    const double nyquist_hz = 0.5 / p_.sample_period_s;
+    const double order_hz = 1.0 / (period_samples * channel_period_s_);
+    const double nyquist_hz = 0.5 / channel_period_s_;
     // |sum of (v_i - mean) e^(-i omega i)|^2 of every order by Goertzel's
     // recurrence, the orders side by side in the loop over the samples, so
     // that no order waits on its own last step.
@@ -224,7 +251,7 @@ double AutomaticChatterDetector::vibration_ratio(int samples, double period_samp
     for (int order = teeth / 2; order * order_hz < nyquist_hz && orders < order_s1_.size();
          order += teeth, ++orders) {
       order_twice_cos_[orders] =
-          2 * std::cos(2 * std::numbers::pi * order * order_hz * p_.sample_period_s);
+          2 * std::cos(2 * std::numbers::pi * order * order_hz * channel_period_s_);
       order_s1_[orders] = order_s2_[orders] = 0;
     }
     const double* __restrict twice_cos = order_twice_cos_.data();

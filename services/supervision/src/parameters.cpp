@@ -196,6 +196,14 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   p.vibration_sensor_noise_rms_n =
       or_default("wideband_noise_rms_n", op.wideband_noise_rms_n(), 0.0, 0.0, 1000.0,
                  "set the wideband F_y channel's noise in N rms, e.g. 2 (0: none taken out)");
+  if (const auto per_tick = op.wideband_samples_per_tick(); per_tick == 0) {
+    p.vibration_samples_per_tick = 1;
+  } else if (per_tick > static_cast<uint32_t>(Parameters::kMaxVibrationSamplesPerTick)) {
+    o.fail("wideband_samples_per_tick", "must be 1-8", per_tick,
+           "give the wideband channel's samples per sample period, e.g. 5 (0: 1)");
+  } else {
+    p.vibration_samples_per_tick = static_cast<int>(per_tick);
+  }
   if (op.identification_levels_size() > Parameters::kMaxIdentificationLevels) {
     o.fail("identification_levels", "has more levels than the edge holds",
            op.identification_levels_size(), "give at most 4 levels, e.g. [0.6, 0.8]");

@@ -12,7 +12,8 @@
 //       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-flip X]
 //       [--vibration-backup X]
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
-//       [--sample-period S] [--mill-model FILE] [--no-regeneration] [--twin-label]
+//       [--wide-samples N] [--sample-period S] [--mill-model FILE] [--no-regeneration]
+//       [--twin-label]
 //
 // --help lists every flag with what it does and its default.
 //
@@ -53,7 +54,11 @@
 // (operation.sample_period_s; the configuration's 0.0005, the paper's 2 kHz),
 // and so do the wideband channel E reads and the vibration the label reads;
 // 0.00025 shows what E and the label make of a channel sampled twice as
-// fast. --mill-model FILE: the
+// fast. --wide-samples N: the wideband channel alone samples N times a
+// sample period (simulation.f_y_wide_samples_per_tick and
+// operation.wideband_samples_per_tick; 2 or 5 at 0.5 ms): E reads it at that
+// rate while the loop, F_z and the label stay at the sample period.
+// --mill-model FILE: the
 // simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
 // critical depths keep the configuration's. --no-regeneration: the mill
@@ -266,6 +271,7 @@ int main(int argc, char** argv) {
   double wide_cutoff = -1;    // < 0: the configuration's
   double sample_period = -1;  // < 0: the configuration's
   int wide_order = 0;         // 0: the configuration's
+  int wide_samples = 0;       // 0: the configuration's
   // E's parameters the study may override (< 0: the shipped value).
   struct Knob {
     const char* flag;
@@ -347,6 +353,9 @@ int main(int argc, char** argv) {
       ->check(smc::bench::kPositive);
   app.add_option("--wide-order", wide_order, "that filter's order, even, 2-8 (2)")
       ->check(CLI::Range(2, 8));
+  app.add_option("--wide-samples", wide_samples,
+                 "the wideband F_y channel's samples per sample period, and E's (1)")
+      ->check(CLI::Range(1, 8));
   app.add_option("--sample-period", sample_period,
                  "the edge's sample period, s, and the channel's and the label's (0.0005)")
       ->check(smc::bench::kPositive);
@@ -438,6 +447,10 @@ int main(int argc, char** argv) {
     base.mutable_operation()->set_wideband_cutoff_hz(wide_cutoff);
   }
   if (sample_period > 0) base.mutable_operation()->set_sample_period_s(sample_period);
+  if (wide_samples > 0) {
+    base.mutable_simulation()->set_f_y_wide_samples_per_tick(static_cast<uint32_t>(wide_samples));
+    base.mutable_operation()->set_wideband_samples_per_tick(static_cast<uint32_t>(wide_samples));
+  }
   if (wide_order > 0) {
     base.mutable_simulation()->set_f_y_wide_order(static_cast<uint32_t>(wide_order));
     base.mutable_operation()->set_wideband_filter_order(static_cast<uint32_t>(wide_order));
@@ -520,12 +533,13 @@ int main(int argc, char** argv) {
         shown.chatter_threshold, shown.chatter_confirm_revolutions);
   }
   std::printf(
-      "; band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms, a sample every %.2f ms; "
+      "; band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms, a sample every %.2f ms (the "
+      "wideband channel's every %.3f ms); "
       "programmed %.2f mm/tooth, %d seeds; the mill: %s%s; labelled on %s\n\n",
       base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
       base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(),
-      1000 * shown.sample_period_s, fpt, seeds,
-      mill_model_file.empty() ? "the configuration's model" : mill_model_file.c_str(),
+      1000 * shown.sample_period_s, 1000 * shown.sample_period_s / shown.vibration_samples_per_tick,
+      fpt, seeds, mill_model_file.empty() ? "the configuration's model" : mill_model_file.c_str(),
       no_regeneration ? ", without regeneration (no cut can chatter: every onset the label "
                         "finds is the forced response's)"
                       : "",

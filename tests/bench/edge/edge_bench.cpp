@@ -10,7 +10,9 @@
 //    time; "x_real_time" is machine seconds per wall-clock second.
 //  - BM_ChatterRevolution/<rpm>/<estimate>: module E's work for one
 //    revolution (its samples and its decision) at that speed, with S alone
-//    (0) or with the vibration estimate and its spectral correction (1);
+//    (0) or with the vibration estimate and its spectral correction from a
+//    wideband channel sampled once (1) or five times (5, as shipped) a
+//    period;
 //    "budget_pct": that work as a share of the revolution's duration.
 //
 //   build/release/bin/smc-bench-edge [--benchmark_filter=...]
@@ -137,10 +139,14 @@ void virtual_run(benchmark::State& state, const char* name) {
 // and a 737 Hz tone in F_z and in the wideband F_y. At 1194 rpm a revolution
 // is 100.5 samples, so the estimate reads the revolution before through the
 // fractional delay's taps; at 750 and 3000 rpm it falls on a sample.
+// `estimate`: the wideband channel's samples a period (0: no estimate, S
+// alone; 1: the loop's rate; 5: the shipped 10 kHz).
 void chatter_revolution(benchmark::State& state) {
   const double rpm = static_cast<double>(state.range(0));
+  const auto per_tick = static_cast<int>(state.range(1));
   EdgeParameters p = edge_config_from_proto(config("smc2.textproto")).params;
-  if (state.range(1) == 0) p.vibration_mode_count = 0;
+  if (per_tick == 0) p.vibration_mode_count = 0;
+  p.vibration_samples_per_tick = std::max(per_tick, 1);
   AutomaticChatterDetector e;
   e.configure(p);
   Signals s;
@@ -157,7 +163,15 @@ void chatter_revolution(benchmark::State& state) {
       const double chatter = std::sin(2 * kPi * 737 * t);
       s.sample.f_z_n = 300 + 80 * tooth + 20 * chatter;
       s.sample.f_y_wide_n = 400 + 150 * tooth + 20 * chatter;
-      e.on_sample(s);
+      if (per_tick > 1) {
+        s.sample.wide_count = per_tick;
+        for (int j = 0; j < per_tick; ++j) {
+          const double u = t + (j + 1 - per_tick) * p.sample_period_s / per_tick;
+          s.sample.f_y_wide_sub_n[j] =
+              400 + 150 * std::sin(2 * kPi * 4 * rpm / 60 * u) + 20 * std::sin(2 * kPi * 737 * u);
+        }
+      }
+      if (e.on_sample(s) != Status::kOk) state.SkipWithError("E refused the sample");
     }
     e.update(s);
     e.clear_outputs(s);
@@ -177,7 +191,7 @@ BENCHMARK_CAPTURE(virtual_run, smc2, "smc2.textproto")->Unit(benchmark::kSecond)
 
 BENCHMARK(chatter_revolution)
     ->ArgNames({"rpm", "estimate"})
-    ->ArgsProduct({{750, 1194, 3000}, {0, 1}})
+    ->ArgsProduct({{750, 1194, 3000}, {0, 1, 5}})
     ->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();

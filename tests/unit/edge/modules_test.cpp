@@ -10,6 +10,7 @@
 #include <initializer_list>
 #include <numbers>
 #include <random>
+#include <tuple>
 
 #include "edge_test_config.hpp"
 #include "smc/edge/program.hpp"
@@ -700,13 +701,18 @@ TEST(AutomaticChatterDetector, ASlowlyGrowingVibrationIsChatterBeforeItReachesTh
 // the simulated mill's filter run at that rate, and q of the sampled
 // vibration is the truth E must read.
 TEST(AutomaticChatterDetector, TheEstimateReadsTheStructuresOwnChatterShare) {
-  // The shipped channel (second order at 500 Hz: 1.3 %) and a steeper one
+  // The shipped channel (second order at 500 Hz: 1.3 %), a steeper one
   // (eighth order at 800 Hz, operation.wideband_filter_order: 4.0 %; 17 %
-  // when E takes it for a second order).
-  for (const auto& [cutoff_hz, order] : {std::pair{500.0, 2}, std::pair{800.0, 8}}) {
+  // when E takes it for a second order), and one sampled five times a
+  // period (operation.wideband_samples_per_tick) behind an eighth order at
+  // 3.5 kHz, well above the modes.
+  for (const auto& [cutoff_hz, order, per_tick, within] :
+       {std::tuple{500.0, 2, 1, 0.1}, std::tuple{800.0, 8, 1, 0.1},
+        std::tuple{3500.0, 8, 5, 0.02}}) {
     EdgeParameters p = with_y_modes(params());
     p.vibration_sensor_cutoff_hz = cutoff_hz;
     p.vibration_sensor_order = order;
+    p.vibration_samples_per_tick = per_tick;
     AutomaticChatterDetector e;
     e.configure(p);
     constexpr int kSub = 40;
@@ -746,7 +752,11 @@ TEST(AutomaticChatterDetector, TheEstimateReadsTheStructuresOwnChatterShare) {
             v += q;
           }
           s.sample.f_y_wide_n = channel(force);
+          if (per_tick > 1 && (j + 1) % (kSub / per_tick) == 0) {
+            s.sample.f_y_wide_sub_n[(j + 1) / (kSub / per_tick) - 1] = s.sample.f_y_wide_n;
+          }
         }
+        s.sample.wide_count = per_tick > 1 ? per_tick : 0;
         s.sample.f_z_n = 300;
         truth.push_back(v);
         e.on_sample(s);
@@ -767,9 +777,37 @@ TEST(AutomaticChatterDetector, TheEstimateReadsTheStructuresOwnChatterShare) {
     EXPECT_EQ(compared, 6);
     std::printf(
         "E's q against the structure's: worst relative error %.3f (channel at %.0f Hz, "
-        "order %d)\n",
-        worst, p.vibration_sensor_cutoff_hz, order);
-    EXPECT_LT(worst, 0.1) << "channel at " << cutoff_hz << " Hz, order " << order;
+        "order %d, %d samples a period)\n",
+        worst, p.vibration_sensor_cutoff_hz, order, per_tick);
+    EXPECT_LT(worst, within) << "channel at " << cutoff_hz << " Hz, order " << order << ", "
+                             << per_tick << " a period";
+  }
+}
+
+// The wideband channel's rate is the configuration's: a drive that brings
+// another number of samples a period than E expects
+// (operation.wideband_samples_per_tick) makes E fail, so the core holds the
+// feed, rather than estimate the vibration at the wrong rate. A sensor
+// without the channel (NaN) is not an error: E judges F_z alone.
+TEST(AutomaticChatterDetector, AWidebandChannelAtAnotherRateIsAnError) {
+  for (const int expected : {1, 5}) {
+    EdgeParameters p = with_y_modes(params());
+    p.vibration_samples_per_tick = expected;
+    AutomaticChatterDetector e;
+    e.configure(p);
+    Signals s;
+    s.sample.f_z_n = 300;
+    s.sample.f_y_wide_n = 400;
+    for (const int brought : {0, 2, 5}) {
+      s.sample.wide_count = brought;
+      for (int j = 0; j < brought; ++j) s.sample.f_y_wide_sub_n[j] = 400;
+      const bool agrees = expected == 1 ? brought == 0 : brought == expected;
+      EXPECT_EQ(e.on_sample(s), agrees ? Status::kOk : Status::kError)
+          << expected << " expected, " << brought << " brought";
+    }
+    s.sample.f_y_wide_n = std::nan("");
+    s.sample.wide_count = 0;
+    EXPECT_EQ(e.on_sample(s), Status::kOk) << "no channel";
   }
 }
 

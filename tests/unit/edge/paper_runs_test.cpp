@@ -268,15 +268,19 @@ TEST(PaperRuns, OperatorChatterSignalRunsTheSuppressionRoutine) {
   EXPECT_EQ(r->activity_mismatches, 0u) << r->first_mismatch;
 }
 
-class NoHeapAllocation : public ::testing::TestWithParam<double> {};
+class NoHeapAllocation : public ::testing::TestWithParam<std::pair<double, int>> {};
 
 // At 1500 rpm a revolution is 80 samples; at 1100 rpm it is 109 or 110, and
-// module E uses FFT sizes it planned at configuration.
+// module E uses FFT sizes it planned at configuration (with the wideband
+// channel five times a sample period, its estimate's are five times those).
 TEST_P(NoHeapAllocation, AfterStartUp) {
+  const auto [rpm, wide_per_tick] = GetParam();
   auto raw = test::shipped_config("smc2.textproto");
+  raw.mutable_simulation()->set_f_y_wide_samples_per_tick(static_cast<uint32_t>(wide_per_tick));
+  raw.mutable_operation()->set_wideband_samples_per_tick(static_cast<uint32_t>(wide_per_tick));
   auto* pass = raw.mutable_program()->mutable_passes(0);
-  pass->set_feedrate_mm_s(pass->feedrate_mm_s() * GetParam() / pass->spindle_rpm());
-  pass->set_spindle_rpm(GetParam());
+  pass->set_feedrate_mm_s(pass->feedrate_mm_s() * rpm / pass->spindle_rpm());
+  pass->set_spindle_rpm(rpm);
   EdgeConfig cfg = edge_config_from_proto(raw);
   SimulatedMill mill(raw.milling_model(), raw.simulation(), cfg.params.sample_period_s);
   EdgeCore core(cfg, mill);
@@ -285,6 +289,7 @@ TEST_P(NoHeapAllocation, AfterStartUp) {
   RevolutionRecord rev;
   ForceBatchRecord batch;
   uint64_t events = 0;
+  bool estimated = false;
   OperatorInputs op;
   smc::test::ForbidAllocations guard;
   for (int i = 0; i < 300000 && !core.done(); ++i) {
@@ -300,6 +305,7 @@ TEST_P(NoHeapAllocation, AfterStartUp) {
     core.tick(false);
     while (core.events().try_pop(ev)) ++events;
     while (core.revolutions().try_pop(rev)) {
+      estimated = estimated || rev.chatter_vibration_ratio > 0;  // E's vibration estimate ran
     }
     while (core.batches().try_pop(batch)) {
     }
@@ -307,12 +313,16 @@ TEST_P(NoHeapAllocation, AfterStartUp) {
   const uint64_t violations = guard.violations();
   EXPECT_TRUE(core.done());
   EXPECT_GT(events, 5u);
+  EXPECT_TRUE(estimated);
   EXPECT_EQ(violations, 0u);
 }
 
-INSTANTIATE_TEST_SUITE_P(PaperRuns, NoHeapAllocation, ::testing::Values(1500.0, 1100.0),
-                         [](const auto& speed) {
-                           return std::to_string(static_cast<int>(speed.param)) + "rpm";
+INSTANTIATE_TEST_SUITE_P(PaperRuns, NoHeapAllocation,
+                         ::testing::Values(std::pair{1500.0, 1}, std::pair{1100.0, 1},
+                                           std::pair{1100.0, 5}, std::pair{1500.0, 5}),
+                         [](const auto& p) {
+                           return std::to_string(static_cast<int>(p.param.first)) + "rpm_" +
+                                  std::to_string(p.param.second) + "wide";
                          });
 
 TEST(PaperRuns, RevolutionsFollowTheMeasuredSpindleSpeed) {
@@ -532,6 +542,23 @@ TEST(Faults, ModuleErrorHoldsTheFeedAndNamesTheModule) {
                                        static_cast<int>(ModuleId::L)});
 }
 
+// A dynamometer whose wideband channel samples five times a period, under a
+// configuration that tells E once (operation.wideband_samples_per_tick): E
+// fails on the first such sample it takes, the feed is held from there to
+// the end of the run, and the run's summary names module E.
+TEST(Faults, AWidebandChannelAtAnotherRateHoldsTheFeedAndNamesModuleE) {
+  auto r = run_paper("smc2.textproto", {}, [](smc::config::SupervisorConfig& c) {
+    c.mutable_simulation()->set_f_y_wide_samples_per_tick(5);
+  });
+  EXPECT_FALSE(r->summary.completed());
+  ASSERT_EQ(r->summary.faults_size(), 1) << smc::documents::to_json(r->summary);
+  EXPECT_NE(r->summary.faults(0).find("module error in module E"), std::string::npos)
+      << r->summary.faults(0);
+  EXPECT_TRUE(r->core->fault_hold());
+  EXPECT_EQ(r->core->signals().feedrate_cmd_mm_s, 0);
+  EXPECT_EQ(r->summary.chatter_events(), 0u);
+}
+
 TEST(Faults, OverrunHoldsTheFeed) {
   auto raw = test::shipped_config("smc1.textproto");
   EdgeConfig cfg = edge_config_from_proto(raw);
@@ -602,6 +629,71 @@ TEST(SimulatedDynamometer, AWidebandFilterOrderItDoesNotHaveIsRefused) {
     } catch (const ConfigError& e) {
       EXPECT_NE(std::string(e.what()).find("simulation.f_y_wide_order"), std::string::npos);
     }
+  }
+}
+
+// The wideband channel sampled faster than the loop
+// (simulation.f_y_wide_samples_per_tick): five samples a period, evenly
+// spaced, the last of them the period's f_y_wide_n, which is the one-a-period
+// channel's own; the other channels and their noise are as they were. A
+// count that does not divide the simulator's internal steps is refused
+// naming the field.
+TEST(SimulatedDynamometer, AFasterWidebandChannelBringsItsSamplesEvenlySpaced) {
+  auto raw = test::shipped_config("smc2.textproto");
+  const EdgeConfig cfg = edge_config_from_proto(raw);
+  const double dt = cfg.params.sample_period_s;
+  raw.mutable_simulation()->set_f_y_wide_samples_per_tick(1);
+  SimulatedMill once(raw.milling_model(), raw.simulation(), dt);
+  raw.mutable_simulation()->set_f_y_wide_samples_per_tick(5);
+  SimulatedMill five(raw.milling_model(), raw.simulation(), dt);
+  // The same channel without noise, to compare the samples between periods
+  // with the filter's own output.
+  auto quiet = raw;
+  quiet.mutable_simulation()->set_noise_rms_n(0);
+  quiet.mutable_simulation()->set_f_y_wide_samples_per_tick(0);
+  SimulatedMill q1(quiet.milling_model(), quiet.simulation(), dt / 5);
+  quiet.mutable_simulation()->set_f_y_wide_samples_per_tick(5);
+  SimulatedMill q5(quiet.milling_model(), quiet.simulation(), dt);
+  once.load(cfg.program);
+  five.load(cfg.program);
+  q1.load(cfg.program);
+  q5.load(cfg.program);
+  DriveSample a, b, c, d;
+  int in_cut = 0;
+  double worst = 0, largest = 0;
+  for (int i = 0; i < 40000; ++i) {
+    ASSERT_EQ(once.step(5, a), Status::kOk);
+    ASSERT_EQ(five.step(5, b), Status::kOk);
+    ASSERT_EQ(q5.step(5, d), Status::kOk);
+    EXPECT_EQ(a.force.wide_count, 0);
+    ASSERT_EQ(b.force.wide_count, 5);
+    ASSERT_EQ(b.force.f_y_wide_sub_n[4], b.force.f_y_wide_n);
+    ASSERT_EQ(a.force.f_y_n, b.force.f_y_n);
+    ASSERT_EQ(a.force.f_z_n, b.force.f_z_n);
+    // The last sample's filter output is the same in both; only the
+    // channel's noise differs (its own stream, drawn five times a period).
+    EXPECT_NEAR(a.force.f_y_wide_n, b.force.f_y_wide_n, 20.0);
+    for (int j = 0; j < 5; ++j) {
+      // A mill stepped five times as often (its one channel sample a step)
+      // at the same feed: its filter sees the same force at the same
+      // internal steps.
+      ASSERT_EQ(q1.step(5, c), Status::kOk);
+      worst = std::max(worst, std::fabs(c.force.f_y_wide_n - d.force.f_y_wide_sub_n[j]));
+      largest = std::max(largest, std::fabs(c.force.f_y_wide_n));
+    }
+    if (b.in_pass && b.engagement > 0) ++in_cut;
+  }
+  ASSERT_GT(in_cut, 1000) << "the comparison must cover cutting";
+  ASSERT_GT(largest, 100);
+  EXPECT_LT(worst, 1e-6 * largest) << "the samples between periods are the filter's own";
+  raw.mutable_simulation()->set_f_y_wide_samples_per_tick(4);
+  try {
+    SimulatedMill bad(raw.milling_model(), raw.simulation(), dt);
+    ADD_FAILURE() << "4 samples in 50 internal steps were accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("simulation.f_y_wide_samples_per_tick"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("fix:"), std::string::npos) << e.what();
   }
 }
 

@@ -116,6 +116,20 @@ TEST(Parameters, TheWidebandFilterOrderDefaultsToTheSecondAndABadOneIsRefused) {
   }
 }
 
+// The wideband channel's samples a period: 0 is one (the loop's rate); more
+// than the edge holds is refused naming the field.
+TEST(Parameters, TheWidebandRateDefaultsToTheLoopsAndABadOneIsRefused) {
+  auto cfg = shipped("smc2.textproto");
+  cfg.mutable_operation()->set_wideband_samples_per_tick(0);
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_samples_per_tick, 1);
+  cfg.mutable_operation()->set_wideband_samples_per_tick(5);
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_samples_per_tick, 5);
+  cfg.mutable_operation()->set_wideband_samples_per_tick(9);
+  const std::string why = refusal(cfg);
+  EXPECT_NE(why.find("supervisor_config.operation.wideband_samples_per_tick"), std::string::npos)
+      << why;
+}
+
 TEST(Parameters, TheWidebandNoiseIsTheShippedChannelsAndABadOneIsRefused) {
   auto cfg = shipped("smc2.textproto");
   EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_noise_rms_n, 2);

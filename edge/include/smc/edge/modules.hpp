@@ -124,9 +124,10 @@ class AutomaticChatterDetector final : public Module {
   Status on_sample(Signals& s) noexcept override;
   Status update(Signals& s) noexcept override;
 
-  // q for the revolution that ended with the last sample, `samples` long,
-  // against the one before at `period_samples` (the measured speed's
-  // revolution in samples), both energies less the channel's expected noise
+  // q for the revolution that ended with the last sample, `samples` sample
+  // periods long, against the one before at `period_samples` (the measured
+  // speed's revolution in sample periods; the estimate reads the channel's
+  // own samples, per_tick_ of them a period), both energies less the channel's expected noise
   // (a change below it reads 0); NaN when the estimate does not cover both,
   // or the noise's share is all of the energy. Real-time safe after
   // configure(). It also reads the revolution's period-doubling share
@@ -136,7 +137,7 @@ class AutomaticChatterDetector final : public Module {
   // The factor that takes a bin of the estimate's energy at this frequency
   // to the structure's: |H(j omega)|^2 / (|H_held(e^(j omega T))|^2 |L(j omega)|^2),
   // H the y modes, H_held their discretisation with the force held over a
-  // sample period, L the wideband channel's anti-alias filter; at most
+  // sample period of the wideband channel, L the wideband channel's anti-alias filter; at most
   // kMaxCorrection. `held_norm`, when given, receives |H_held|^2 (white
   // noise on the channel reaches the estimate through it). Real-time safe.
   double vibration_correction(double frequency_hz, double* held_norm = nullptr) const noexcept;
@@ -162,9 +163,13 @@ class AutomaticChatterDetector final : public Module {
   static constexpr int kFlipConfirm = 2;       // `flip`: revolutions in a row
 
   // The vibration estimate: per y mode its exact zero-order-hold
-  // discretisation at the sample period and its state (displacement q in mm,
-  // velocity w), driven by the wideband F_y; their sum, the estimate, kept
-  // in a ring of two revolutions and a little more.
+  // discretisation at the wideband channel's sample period and its state
+  // (displacement q in mm, velocity w), driven by the wideband F_y; their
+  // sum, the estimate, kept in a ring of two revolutions and a little more.
+  // The channel brings per_tick_ samples a sample period
+  // (Parameters::vibration_samples_per_tick), channel_period_s_ apart.
+  int per_tick_ = 1;
+  double channel_period_s_ = 0;
   struct VibrationMode {
     double p11 = 1, p12 = 0, p21 = 0, p22 = 1, g1 = 0, g2 = 0;
     double q = 0, w = 0;

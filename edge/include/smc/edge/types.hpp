@@ -54,6 +54,13 @@ struct ForceSample {
   // little of its force): module E estimates the tool-part vibration from
   // it. NaN when the sensor has no such channel; E then judges F_z alone.
   double f_y_wide_n = __builtin_nan("");
+  // The same channel where it samples faster than the loop: `wide_count`
+  // samples since the last sample period, evenly spaced, oldest first (the
+  // last is f_y_wide_n). 0: the channel samples with the loop, f_y_wide_n
+  // alone (operation.wideband_samples_per_tick says which E expects).
+  static constexpr int kMaxWideSamples = 8;
+  int wide_count = 0;
+  double f_y_wide_sub_n[kMaxWideSamples] = {};
 };
 
 // Operator inputs as last received (module B reads them).

@@ -125,7 +125,7 @@ HalSampleStream::~HalSampleStream() {
 
 bool HalSampleStream::read(HalRecord& out) noexcept {
   if (!hal_stream_readable(&impl_->stream)) return false;
-  hal_stream_data d[14];
+  hal_stream_data d[19];
   unsigned no = 0;
   if (hal_stream_read(&impl_->stream, d, &no) < 0) return false;
   out.fx_n = d[0].f;
@@ -142,6 +142,8 @@ bool HalSampleStream::read(HalRecord& out) noexcept {
   out.fy_wide_present = d[11].b;
   out.vibration_y_mm = d[12].f;
   out.vibration_present = d[13].b;
+  for (int i = 0; i < 4; ++i) out.fy_wide_sub_n[i] = d[14 + i].f;
+  out.fy_wide_samples = d[18].s;
   out.sample_no = no;
   if (records_ > 0) {
     if (no == last_no_) {

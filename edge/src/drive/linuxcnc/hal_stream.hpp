@@ -27,10 +27,12 @@ struct HalRecord {
   bool fy_wide_present = false;         // smc-force-y-wide-present: the sensor has that channel
   double vibration_y_mm = 0;            // smc-vibration-y: the tool's vibration (the virtual
   bool vibration_present = false;       // dynamometer's; smc-vibration-y-present: driven)
+  double fy_wide_sub_n[4] = {};         // smc-force-y-wide-sub-0..3: the channel's earlier
+  std::int32_t fy_wide_samples = 0;     // samples this period, of smc-force-y-wide-samples
   std::uint32_t sample_no = 0;          // the sampler's count
 };
 
-inline constexpr const char* kRecordTypes = "fffffffffsfbfb";
+inline constexpr const char* kRecordTypes = "fffffffffsfbfbffffs";
 // LinuxCNC 2.9's sampler stream key for channel 0 (rtapi_shmkeys.h,
 // SAMPLER_SHMEM_KEY); channel n is key + n.
 inline constexpr int kSamplerKey = 0x48534130;

@@ -481,6 +481,14 @@ Status LinuxCncDrive::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   out.force = ForceSample{
       static_cast<double>(d.ticks) * d.period_s, d.rec.fx_n, d.rec.fy_n, d.rec.fz_n,
       d.rec.fy_wide_present ? d.rec.fy_wide_n : std::numeric_limits<double>::quiet_NaN()};
+  // Where the channel samples faster than the servo period, its earlier
+  // samples of the period too (smc-force-y-wide-samples; 0 or 1: one).
+  if (d.rec.fy_wide_present && d.rec.fy_wide_samples > 1) {
+    const int n = std::min<int>(d.rec.fy_wide_samples, 5);
+    out.force.wide_count = n;
+    for (int i = 0; i < n - 1; ++i) out.force.f_y_wide_sub_n[i] = d.rec.fy_wide_sub_n[i];
+    out.force.f_y_wide_sub_n[n - 1] = d.rec.fy_wide_n;
+  }
   // The tool's vibration where the machine has it (the virtual
   // dynamometer's, for the chatter label); NaN where it has none.
   out.vibration_y_mm =

@@ -49,6 +49,14 @@
 //                              f_y_wide_order), with noise
 //                              from a stream of its own (the simulated mill's
 //                              f_y_wide_n)
+//   out float force-y-wide-sub.0-3
+//                              where the wideband channel samples faster
+//                              than the servo period
+//                              (simulation.f_y_wide_samples_per_tick, at
+//                              most 5 here: the sampler has 21 pins), the
+//                              period's earlier samples of it, oldest first
+//                              (force-y-wide is the last); else 0
+//   out s32   wide-samples     the channel's samples this period (1-5)
 //   out bit   wideband         true: this sensor has the wideband F_y channel
 //   out float vibration-y-mm   the tool's vibration relative to the part in
 //                              y (mm), unfiltered and without noise: what
@@ -101,6 +109,9 @@ namespace {
 namespace mc = smc::machining;
 
 constexpr unsigned kPeriodMismatch = 1u << 8;
+// The wideband channel's samples a servo period at most: the last on
+// force-y-wide, the others on force-y-wide-sub.0-3.
+constexpr unsigned kMaxWidePerTick = 5;
 
 struct Pins {
   hal_float_t* x_mm;
@@ -113,6 +124,8 @@ struct Pins {
   hal_float_t* force_y;
   hal_float_t* force_z;
   hal_float_t* force_y_wide;
+  hal_float_t* force_y_wide_sub[4];
+  hal_s32_t* wide_samples;
   hal_bit_t* wideband;
   hal_float_t* vibration_y_mm;
   hal_bit_t* vibration;
@@ -128,6 +141,10 @@ struct Dyno {
   mc::MillSimulator sim;
   std::vector<double> trace_x, trace_y, trace_z;
   mc::AntiAliasLowPass lp_x, lp_y, lp_z, lp_y_wide;
+  // The wideband channel's samples a period, one every `wide_stride`
+  // internal steps.
+  int wide_per_tick = 1;
+  std::size_t wide_stride = 1;
   std::mt19937_64 rng;
   std::normal_distribution<double> noise{0.0, 1.0};
   // The wideband channel's noise has a stream of its own, so that the
@@ -215,6 +232,16 @@ std::unique_ptr<Dyno> make_dyno() {
   d->trace_x.assign(steps, 0.0);
   d->trace_y.assign(steps, 0.0);
   d->trace_z.assign(steps, 0.0);
+  const auto per_tick = s.f_y_wide_samples_per_tick() == 0 ? 1U : s.f_y_wide_samples_per_tick();
+  if (per_tick > kMaxWidePerTick || steps % per_tick != 0) {
+    throw std::runtime_error(std::string(config) +
+                             ": simulation.f_y_wide_samples_per_tick: " + std::to_string(per_tick) +
+                             " samples do not divide the " + std::to_string(steps) +
+                             " internal steps of a servo period evenly (at most 5 here: the "
+                             "sampler's pins); fix: 0 or 1, 2 or 5");
+  }
+  d->wide_per_tick = static_cast<int>(per_tick);
+  d->wide_stride = steps / per_tick;
   const double rate = 1.0 / d->sim.internal_step_s();
   d->lp_x.configure(s.f_y_cutoff_hz(), rate);
   d->lp_y.configure(s.f_y_cutoff_hz(), rate);
@@ -283,18 +310,22 @@ void update(void* /*arg*/, long period) {
   mc::Sample smp;
   status |= d.sim.step(in, smp, {d.trace_x.data(), d.trace_y.data(), d.trace_z.data()});
   double fx = 0, fy = 0, fz = 0, fy_wide = 0;
+  double wide[kMaxWidePerTick] = {};
+  int wide_n = 0;
   for (std::size_t k = 0; k < d.trace_x.size(); ++k) {
     fx = d.lp_x(d.trace_x[k]);
     fy = d.lp_y(d.trace_y[k]);
     fz = d.lp_z(d.trace_z[k]);
     fy_wide = d.lp_y_wide(d.trace_y[k]);
+    if ((k + 1) % d.wide_stride == 0) wide[wide_n++] = fy_wide;
   }
   if (d.noise_rms_n > 0) {
     fx += d.noise_rms_n * d.noise(d.rng);
     fy += d.noise_rms_n * d.noise(d.rng);
     fz += d.noise_rms_n * d.noise(d.rng);
-    fy_wide += d.noise_rms_n * d.noise_wide(d.rng_wide);
+    for (int i = 0; i < wide_n; ++i) wide[i] += d.noise_rms_n * d.noise_wide(d.rng_wide);
   }
+  fy_wide = wide[wide_n - 1];
   // The cutter's footprint behind its leading edge now stands at the tool's
   // Z: every bin [i, i+1) x bin_mm wholly behind the leading edge (the bin
   // under the edge is where the next chip's depth is read).
@@ -308,6 +339,8 @@ void update(void* /*arg*/, long period) {
   *p.force_y = fy;
   *p.force_z = fz;
   *p.force_y_wide = fy_wide;
+  for (int i = 0; i < 4; ++i) *p.force_y_wide_sub[i] = i < wide_n - 1 ? wide[i] : 0.0;
+  *p.wide_samples = wide_n;
   *p.wideband = true;
   *p.vibration_y_mm = smp.tool_y_mm - smp.part_y_mm;
   *p.vibration = true;
@@ -338,6 +371,11 @@ int make_pins(int comp) {
   r |= hal_pin_float_new("smc-dyno.force-y", HAL_OUT, &p.force_y, comp);
   r |= hal_pin_float_new("smc-dyno.force-z", HAL_OUT, &p.force_z, comp);
   r |= hal_pin_float_new("smc-dyno.force-y-wide", HAL_OUT, &p.force_y_wide, comp);
+  for (int i = 0; i < 4; ++i) {
+    r |= hal_pin_float_newf(HAL_OUT, &p.force_y_wide_sub[i], comp, "smc-dyno.force-y-wide-sub.%d",
+                            i);
+  }
+  r |= hal_pin_s32_new("smc-dyno.wide-samples", HAL_OUT, &p.wide_samples, comp);
   r |= hal_pin_bit_new("smc-dyno.wideband", HAL_OUT, &p.wideband, comp);
   r |= hal_pin_float_new("smc-dyno.vibration-y-mm", HAL_OUT, &p.vibration_y_mm, comp);
   r |= hal_pin_bit_new("smc-dyno.vibration", HAL_OUT, &p.vibration, comp);

@@ -120,6 +120,11 @@ struct Parameters {
   // expected share module E takes out of both energies of q
   // (operation.wideband_noise_rms_n; 0: none).
   double vibration_sensor_noise_rms_n = 0;
+  // Samples of the wideband F_y channel per sample period
+  // (operation.wideband_samples_per_tick; 0 there: 1): module E's estimate
+  // runs at that multiple of the loop's rate.
+  static constexpr int kMaxVibrationSamplesPerTick = 8;
+  int vibration_samples_per_tick = 1;
   // Module E's rules on the estimated vibration's change from one revolution
   // to the next (not in the configuration message: the detector study's
   // values; the study overrides them to try others). Chatter when it exceeds
