@@ -7,7 +7,9 @@
 // t_s, f_y_n, f_z_n. Optional: f_x_n, f_y_wide_n (ForceSample; absent: NaN),
 // x_mm, depth_mm, spindle_rpm, feedrate_mm_s, pass_index, in_pass (0/1).
 // Missing optional columns take the program's values. `smc-edge simulate` writes files in this
-// format.
+// format. The wideband channel replays one sample a period (f_y_wide_n): a configuration that
+// expects more (operation.wideband_samples_per_tick above 1) makes module E fail and holds the
+// feed at the first finite one; replay such recordings with it at 1.
 
 #include <string>
 #include <vector>
