@@ -50,9 +50,8 @@ struct SimulatedMill::Impl {
   // before it, as they were.
   std::mt19937_64 rng_wide;
   std::normal_distribution<double> noise_wide{0.0, 1.0};
-  // The wideband channel's samples per sample period (the filter's output
-  // every `wide_stride` internal steps); 1: with the loop.
-  int wide_per_tick = 1;
+  // The wideband channel's filter output is sampled every `wide_stride`
+  // internal steps (all of a period's: once, with the loop).
   std::size_t wide_stride = 0;
   // Depth already removed by earlier passes, per bin along the part (mm).
   std::vector<double> removed;
@@ -181,7 +180,6 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
                       std::to_string(ForceSample::kMaxWideSamples) +
                       "); fix: 0 or 1 for one a period, or a divisor such as 2 or 5");
   }
-  s.wide_per_tick = static_cast<int>(per_tick);
   s.wide_stride = steps / per_tick;
   s.trace_x.assign(steps, 0.0);
   s.trace_y.assign(steps, 0.0);
@@ -340,7 +338,7 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   }
   const double x = s.sim.tool_position_mm();
   out.force = ForceSample{s.time_s, fx, fy, fz, wide[wide_n - 1]};
-  if (s.wide_per_tick > 1) {
+  if (wide_n > 1) {
     out.force.wide_count = wide_n;
     std::copy(wide, wide + wide_n, out.force.f_y_wide_sub_n);
   }

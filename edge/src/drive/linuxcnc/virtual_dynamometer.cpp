@@ -141,9 +141,8 @@ struct Dyno {
   mc::MillSimulator sim;
   std::vector<double> trace_x, trace_y, trace_z;
   mc::AntiAliasLowPass lp_x, lp_y, lp_z, lp_y_wide;
-  // The wideband channel's samples a period, one every `wide_stride`
-  // internal steps.
-  int wide_per_tick = 1;
+  // The wideband channel's filter output is sampled every `wide_stride`
+  // internal steps (all of a period's: once a period).
   std::size_t wide_stride = 1;
   std::mt19937_64 rng;
   std::normal_distribution<double> noise{0.0, 1.0};
@@ -240,7 +239,6 @@ std::unique_ptr<Dyno> make_dyno() {
                              " internal steps of a servo period evenly (at most 5 here: the "
                              "sampler's pins); fix: 0 or 1, 2 or 5");
   }
-  d->wide_per_tick = static_cast<int>(per_tick);
   d->wide_stride = steps / per_tick;
   const double rate = 1.0 / d->sim.internal_step_s();
   d->lp_x.configure(s.f_y_cutoff_hz(), rate);
