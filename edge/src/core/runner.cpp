@@ -45,6 +45,9 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
     run.samples.reserve(static_cast<size_t>(std::min<uint64_t>(max_ticks, 4'000'000)) /
                         static_cast<size_t>(decimation));
   }
+  // The vibration between samples: kept from the first sample on, if the
+  // drive gives it then and every sample is kept.
+  bool fine = false;
   EdgeEvent ev;
   RevolutionRecord rev;
   ForceBatchRecord batch;
@@ -77,6 +80,21 @@ RunResult run_virtual(EdgeCore& core, const RunOptions& options) {
           s.force_reference_n, s.feedrate_cmd_mm_s, d.depth_mm, d.spindle_rpm, d.spindle_power_w,
           d.vibration_y_mm, d.engagement, static_cast<int16_t>(d.pass_index), d.in_pass, s.contact,
           s.active, core.situation().active_steps});
+      if (i == 0 && decimation == 1 && options.keep_vibration_between_samples &&
+          d.vibration_count > 1) {
+        fine = true;
+        run.vibration_per_sample = d.vibration_count;
+      }
+      if (fine) {
+        if (d.vibration_count != run.vibration_per_sample) {
+          throw std::runtime_error(
+              "run_virtual: the drive gave " + std::to_string(d.vibration_count) +
+              " vibration values between samples at t = " + std::to_string(d.force.t_s) + " s, " +
+              std::to_string(run.vibration_per_sample) + " at the first");
+        }
+        run.vibration_sub_mm.insert(run.vibration_sub_mm.end(), d.vibration_y_sub_mm,
+                                    d.vibration_y_sub_mm + d.vibration_count);
+      }
     }
     while (core.events().try_pop(ev)) {
       if (ev.kind == EventKind::kToolBroken && run.tool_broken_s < 0) run.tool_broken_s = ev.t_s;
@@ -115,14 +133,26 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
                                 std::to_string(forced->size()) + " samples, the run " +
                                 std::to_string(run.samples.size()));
   }
+  // The vibration the label reads: n values a sample (the run's vibration
+  // between samples, where it has it and no forced vibration is given), m
+  // counting them; sample m / n is the one whose period holds value m.
+  const bool fine = forced == nullptr && run.vibration_per_sample > 1 &&
+                    run.vibration_sub_mm.size() ==
+                        run.samples.size() * static_cast<size_t>(run.vibration_per_sample);
+  const size_t n = fine ? static_cast<size_t>(run.vibration_per_sample) : 1;
+  const size_t values = run.samples.size() * n;
+  auto v_at = [&](size_t m) {
+    return fine ? run.vibration_sub_mm[m] : run.samples[m].vibration_y_mm;
+  };
   // What the label compares from one revolution to the next: v, or the
   // vibration regeneration adds to the forced one.
-  auto compared = [&](size_t k) {
-    const double v = run.samples[k].vibration_y_mm;
-    return forced != nullptr ? v - (*forced)[k] : v;
+  auto compared = [&](size_t m) {
+    const double v = v_at(m);
+    return forced != nullptr ? v - (*forced)[m] : v;
   };
   const double dt = run.samples[1].t_s - run.samples[0].t_s;
   if (!(dt > 0)) return out;
+  const double dv = dt / static_cast<double>(n);  // between the values read
   // The holds that react to chatter: C's, G's, and O's while the spindle changes speed.
   const ModuleMask hold =
       static_cast<ModuleMask>(bit(ModuleId::C) | bit(ModuleId::G) | bit(ModuleId::O));
@@ -130,7 +160,7 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
     return x.spindle_rpm > 0 ? 60.0 / x.spindle_rpm : still_period_s;
   };
   // Revolutions of the trace, by the spindle speed it records (as the
-  // core's revolution clock counts them).
+  // core's revolution clock counts them), in samples.
   std::vector<size_t> starts{0};
   double phase = 0;
   for (size_t k = 0; k < run.samples.size(); ++k) {
@@ -144,35 +174,33 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
   out.resize(revs);
   // A period doubling's share of a revolution's AC energy: its vibration's
   // components at the spindle orders halfway between tooth harmonics
-  // (teeth / 2, 3 teeth / 2, ... below the Nyquist frequency), each read by
-  // its own Fourier sum over the revolution's samples, against the
-  // revolution's AC energy (Parseval: exact for a whole number of samples a
-  // revolution; between, orders next to a halfway one leak into it, below
-  // 0.01 of the energy at 1194 rpm in
+  // (teeth / 2, 3 teeth / 2, ... below the Nyquist frequency of the values
+  // read), each read by its own Fourier sum over the revolution's values,
+  // against the revolution's AC energy (Parseval: exact for a whole number
+  // of values a revolution; between, orders next to a halfway one leak
+  // into it, below 0.01 of the energy at 1194 rpm in
   // ChatterLabel.AVibrationThatRepeatsBetweenSamplesIsNoChange).
   const bool doubling = teeth >= 2 && teeth % 2 == 0;
   auto halfway_share = [&](size_t r) {
-    const size_t first = starts[r], end = starts[r + 1];
-    const auto n = static_cast<double>(end - first);
+    const size_t first = starts[r] * n, end = starts[r + 1] * n;
+    const auto count = static_cast<double>(end - first);
     double mean = 0;
-    for (size_t k = first; k < end; ++k) mean += run.samples[k].vibration_y_mm;
-    mean /= n;
+    for (size_t m = first; m < end; ++m) mean += v_at(m);
+    mean /= count;
     double ac = 0;
-    for (size_t k = first; k < end; ++k) {
-      const double v = run.samples[k].vibration_y_mm - mean;
+    for (size_t m = first; m < end; ++m) {
+      const double v = v_at(m) - mean;
       ac += v * v;
     }
-    const double spindle_hz = 1.0 / period_s(run.samples[first]);
+    const double spindle_hz = 1.0 / period_s(run.samples[starts[r]]);
     double halfway = 0;
-    for (int order = teeth / 2; order * spindle_hz < 0.5 / dt; order += teeth) {
-      // e^(-i omega t) sample by sample, by rotation.
+    for (int order = teeth / 2; order * spindle_hz < 0.5 / dv; order += teeth) {
+      // e^(-i omega t) value by value, by rotation.
       const std::complex<double> step =
-          std::polar(1.0, -2 * std::numbers::pi * order * spindle_hz * dt);
+          std::polar(1.0, -2 * std::numbers::pi * order * spindle_hz * dv);
       std::complex<double> turn = 1, sum = 0;
-      for (size_t k = first; k < end; ++k, turn *= step) {
-        sum += (run.samples[k].vibration_y_mm - mean) * turn;
-      }
-      halfway += 2 * std::norm(sum) / n;
+      for (size_t m = first; m < end; ++m, turn *= step) sum += (v_at(m) - mean) * turn;
+      halfway += 2 * std::norm(sum) / count;
     }
     return ac > 0 ? std::min(halfway / ac, 1.0) : 0.0;
   };
@@ -180,7 +208,7 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
   delay.set(0, FractionalDelay::kMaxHalf);
   // Per revolution: the statistic, and whether it is comparable with the
   // revolution before. The vibration one revolution earlier is read between
-  // samples, when a revolution is not a whole number of them, through a
+  // values, when a revolution is not a whole number of them, through a
   // band-limited fractional delay (as module E reads its estimate):
   // linear interpolation reads a repeating vibration near the tool mode as
   // a change of up to half of it.
@@ -191,9 +219,10 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
     if (r == 0) continue;
     double diff = 0, energy = 0;
     bool ok = true;
-    for (size_t k = starts[r]; k < starts[r + 1]; ++k) {
+    for (size_t m = starts[r] * n; m < starts[r + 1] * n; ++m) {
+      const size_t k = m / n;
       const TraceSample& now = run.samples[k];
-      const double back = static_cast<double>(k) - period_s(now) / dt;
+      const double back = static_cast<double>(m) - period_s(now) / dv;
       if (back < 0) {
         ok = false;
         continue;
@@ -201,11 +230,11 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
       const auto j = static_cast<size_t>(back);
       const double w = back - static_cast<double>(j);
       // As many taps each side as the trace has (all of them but at its
-      // start; j is at least a sample before the trace's last).
+      // start; j is at least a value before the trace's last).
       const auto half = static_cast<int>(std::min<size_t>(
-          {static_cast<size_t>(FractionalDelay::kMaxHalf), j + 1, run.samples.size() - 1 - j}));
+          {static_cast<size_t>(FractionalDelay::kMaxHalf), j + 1, values - 1 - j}));
       if (w != delay.fraction() || half != delay.half()) delay.set(w, half);
-      const TraceSample& before = run.samples[j];
+      const TraceSample& before = run.samples[j / n];
       const double v_before = delay.at(compared, j);
       // A hold or the end of the pass that begins within this revolution
       // (a reaction to it) ends the comparison there; one in force at its
@@ -216,16 +245,16 @@ std::vector<RevolutionChange> vibration_change(const RunResult& run, double stil
       // LinuxCNC's first periods before the sampler's first record) makes
       // its revolution, and the one that reads it as the one before, not
       // comparable; the rest of the trace is judged.
-      if (std::isnan(compared(k)) || std::isnan(v_before)) {
+      if (std::isnan(compared(m)) || std::isnan(v_before)) {
         ok = false;
         continue;
       }
       ok = ok && !stopped && before.in_pass && now.engagement > kMinEngagement &&
            before.engagement > kMinEngagement && now.engagement >= before.engagement &&
            (before.active & hold) == 0;
-      const double d = compared(k) - v_before;
+      const double d = compared(m) - v_before;
       diff += d * d;
-      energy += now.vibration_y_mm * now.vibration_y_mm;
+      energy += v_at(m) * v_at(m);
     }
     c.comparable = ok && energy > 0;
     c.q = energy > 0 ? std::sqrt(diff / energy) : 0;

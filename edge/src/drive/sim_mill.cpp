@@ -39,7 +39,7 @@ struct SimulatedMill::Impl {
   machining::MillSimulator sim;
   smc::config::SimulatedMill options;
   // The force of each internal step of the last sample, for the filters.
-  std::vector<double> trace_x, trace_y, trace_z;
+  std::vector<double> trace_x, trace_y, trace_z, trace_v;
   LowPass lp_x, lp_y, lp_z;
   LowPass lp_y_wide;  // F_y through the F_z channel's filter (ForceSample::f_y_wide_n)
   std::mt19937_64 rng;
@@ -184,6 +184,9 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
   s.trace_x.assign(steps, 0.0);
   s.trace_y.assign(steps, 0.0);
   s.trace_z.assign(steps, 0.0);
+  // The vibration is kept at each step only where the channel samples
+  // faster than the loop (it costs a read of the structure per step).
+  if (per_tick > 1) s.trace_v.assign(steps, 0.0);
   const double rate = 1.0 / s.sim.internal_step_s();
   // A cut-off of 0 (or above Nyquist) means no filter on that channel.
   s.lp_x.configure(sim.f_y_cutoff_hz(), rate);
@@ -315,17 +318,23 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   machining::Sample smp;
   uint32_t status = 0;
   double fx = 0, fy = 0, fz = 0, fy_wide = 0;
-  status |= s.sim.step(in, smp, {s.trace_x.data(), s.trace_y.data(), s.trace_z.data()});
+  status |= s.sim.step(in, smp,
+                       {s.trace_x.data(), s.trace_y.data(), s.trace_z.data(),
+                        s.trace_v.empty() ? nullptr : s.trace_v.data()});
   // The wideband channel's samples of this period, at the end of each
   // stride (one stride, the whole period, when it samples with the loop).
   double wide[ForceSample::kMaxWideSamples] = {};
+  double vib[ForceSample::kMaxWideSamples] = {};
   int wide_n = 0;
   for (std::size_t k = 0; k < s.trace_x.size(); ++k) {
     fx = s.lp_x(s.trace_x[k]);
     fy = s.lp_y(s.trace_y[k]);
     fz = s.lp_z(s.trace_z[k]);
     fy_wide = s.lp_y_wide(s.trace_y[k]);
-    if ((k + 1) % s.wide_stride == 0) wide[wide_n++] = fy_wide;
+    if ((k + 1) % s.wide_stride == 0) {
+      if (!s.trace_v.empty()) vib[wide_n] = s.trace_v[k];
+      wide[wide_n++] = fy_wide;
+    }
   }
   s.time_s += period_s_;
   if (smp.teeth_in_cut > 0) s.cut_length_mm += in.feedrate_mm_s * period_s_;
@@ -349,6 +358,12 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
   out.x_mm = x;
   out.spindle_power_w = smp.power_w;
   out.vibration_y_mm = smp.tool_y_mm - smp.part_y_mm;
+  out.vibration_count = 0;
+  if (wide_n > 1) {
+    out.vibration_count = wide_n;
+    std::copy(vib, vib + wide_n - 1, out.vibration_y_sub_mm);
+    out.vibration_y_sub_mm[wide_n - 1] = out.vibration_y_mm;
+  }
   out.pass_index = pass;
   out.in_pass = s.phase == Phase::kCutting;
   out.program_done = s.phase == Phase::kDone;

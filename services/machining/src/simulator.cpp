@@ -173,6 +173,10 @@ std::uint32_t MillSimulator::Impl::step(Impl& s, const SampleInput& input, Sampl
       trace->fx_n[i] = last.fx_n;
       trace->fy_n[i] = last.fy_n;
       trace->fz_n[i] = last.fz_n;
+      if (trace->vibration_y_mm != nullptr) {
+        const Displacements d = s.engine.structure().displacements();
+        trace->vibration_y_mm[i] = d.tool_y_mm - d.part_y_mm;
+      }
     }
     s.position_mm += dx;
     power_sum += last.tangential_sum_n * v_m_s;
@@ -202,6 +206,7 @@ std::uint32_t MillSimulator::Impl::step(Impl& s, const SampleInput& input, Sampl
       // No non-finite value leaves: a caller's filters would keep it forever.
       for (std::size_t i = 0; i < static_cast<std::size_t>(s.steps_per_sample); ++i) {
         trace->fx_n[i] = trace->fy_n[i] = trace->fz_n[i] = 0;
+        if (trace->vibration_y_mm != nullptr) trace->vibration_y_mm[i] = 0;
       }
     }
   }

@@ -13,7 +13,7 @@
 //       [--vibration-backup X]
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
 //       [--wide-samples N] [--sample-period S] [--mill-model FILE] [--no-regeneration]
-//       [--twin-label]
+//       [--twin-label] [--tick-label]
 //
 // --help lists every flag with what it does and its default.
 //
@@ -57,7 +57,9 @@
 // fast. --wide-samples N: the wideband channel alone samples N times a
 // sample period (simulation.f_y_wide_samples_per_tick and
 // operation.wideband_samples_per_tick; 2 or 5 at 0.5 ms): E reads it at that
-// rate while the loop, F_z and the label stay at the sample period.
+// rate while the loop and F_z stay at the sample period, and the label reads
+// the mill's vibration at the channel's rate too (RunResult::vibration_sub_mm)
+// unless --tick-label keeps it at the sample period.
 // --mill-model FILE: the
 // simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
@@ -267,6 +269,7 @@ int main(int argc, char** argv) {
   bool force_only = false;
   bool no_regeneration = false;
   bool twin_label = false;
+  bool tick_label = false;
   double channel_noise = -1;  // < 0: the configuration's
   double wide_cutoff = -1;    // < 0: the configuration's
   double sample_period = -1;  // < 0: the configuration's
@@ -338,6 +341,9 @@ int main(int argc, char** argv) {
                "label each cut on what regeneration adds to its vibration: its labelling run's "
                "feed replayed on the same mill without regeneration, and the label's q of the "
                "difference (the mill's q in the figures below is that q too)");
+  app.add_flag("--tick-label", tick_label,
+               "with --wide-samples: the label reads the mill's vibration at the sample "
+               "period, not at the channel's rate");
   app.add_option("--threshold", threshold_override,
                  "S's threshold (alone; 1 or more switches E's rules off in both runs, and each "
                  "cut runs once)")
@@ -484,6 +490,7 @@ int main(int argc, char** argv) {
     core.start();
     RunOptions opts;
     opts.max_time_s = 120;
+    opts.keep_vibration_between_samples = !tick_label;
     run = run_virtual(core, opts);
     return summarize(core, run);
   };
@@ -535,7 +542,8 @@ int main(int argc, char** argv) {
   std::printf(
       "; band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms, a sample every %.2f ms (the "
       "wideband channel's every %.3f ms); "
-      "programmed %.2f mm/tooth, %d seeds; the mill: %s%s; labelled on %s\n\n",
+      "programmed %.2f mm/tooth, %d seeds; the mill: %s%s; labelled on %s, read every "
+      "%.3f ms\n\n",
       base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
       base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(),
       1000 * shown.sample_period_s, 1000 * shown.sample_period_s / shown.vibration_samples_per_tick,
@@ -544,7 +552,9 @@ int main(int argc, char** argv) {
                         "finds is the forced response's)"
                       : "",
       twin_label ? "what regeneration adds to the vibration (the cut replayed without it)"
-                 : "the mill's vibration");
+                 : "the mill's vibration",
+      1000 * shown.sample_period_s /
+          (twin_label || tick_label ? 1 : shown.vibration_samples_per_tick));
   std::printf("%6s %6s %6s %8s %6s %9s %8s %8s %8s %8s %8s %9s %8s %10s\n", "rpm", "width",
               "runout", "crit_mm", "runs", "stable", "revs", "S_above", "false", "max_S", "max_q",
               "unstable", "within3", "delay_rev");

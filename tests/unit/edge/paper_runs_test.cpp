@@ -660,7 +660,7 @@ TEST(SimulatedDynamometer, AFasterWidebandChannelBringsItsSamplesEvenlySpaced) {
   q5.load(cfg.program);
   DriveSample a, b, c, d;
   int in_cut = 0;
-  double worst = 0, largest = 0;
+  double worst = 0, largest = 0, worst_v = 0, largest_v = 0;
   for (int i = 0; i < 40000; ++i) {
     ASSERT_EQ(once.step(5, a), Status::kOk);
     ASSERT_EQ(five.step(5, b), Status::kOk);
@@ -680,12 +680,21 @@ TEST(SimulatedDynamometer, AFasterWidebandChannelBringsItsSamplesEvenlySpaced) {
       ASSERT_EQ(q1.step(5, c), Status::kOk);
       worst = std::max(worst, std::fabs(c.force.f_y_wide_n - d.force.f_y_wide_sub_n[j]));
       largest = std::max(largest, std::fabs(c.force.f_y_wide_n));
+      // The vibration at the same instants, for the label: the mill's own.
+      worst_v = std::max(worst_v, std::fabs(c.vibration_y_mm - d.vibration_y_sub_mm[j]));
+      largest_v = std::max(largest_v, std::fabs(c.vibration_y_mm));
     }
+    EXPECT_EQ(a.vibration_count, 0);
+    ASSERT_EQ(b.vibration_count, 5);
+    ASSERT_EQ(b.vibration_y_sub_mm[4], b.vibration_y_mm);
+    ASSERT_EQ(a.vibration_y_mm, b.vibration_y_mm);
     if (b.in_pass && b.engagement > 0) ++in_cut;
   }
   ASSERT_GT(in_cut, 1000) << "the comparison must cover cutting";
   ASSERT_GT(largest, 100);
   EXPECT_LT(worst, 1e-6 * largest) << "the samples between periods are the filter's own";
+  ASSERT_GT(largest_v, 1e-4);
+  EXPECT_LT(worst_v, 1e-6 * largest_v) << "the vibration between periods is the mill's own";
   raw.mutable_simulation()->set_f_y_wide_samples_per_tick(4);
   try {
     SimulatedMill bad(raw.milling_model(), raw.simulation(), dt);
@@ -1095,6 +1104,84 @@ TEST(ChatterLabel, AVibrationThatRepeatsBetweenSamplesIsNoChange) {
   // 2, 6, ..., 30, 34), though 31 and 33 are next to them: between samples
   // the period doubling's share reads what leaks from them.
   EXPECT_LT(most_flip, 0.01) << most_flip;
+}
+
+// The same at 2017 rpm, a revolution 59.5 samples, with spindle orders
+// above the loop's 1 kHz Nyquist frequency (a face mill's forced vibration
+// has them: edge/CHATTER.md, "A steeper channel"). Read at the sample
+// period they fold, and the fold does not repeat at the same angle half a
+// sample later: the label reads change. Read five times a sample period
+// (RunResult::vibration_sub_mm, as the simulated mill gives it where its
+// wideband channel samples that fast) they are no change.
+TEST(ChatterLabel, OrdersAboveTheLoopsNyquistAreNoChangeReadBetweenSamples) {
+  const double rpm = 60.0 / (59.5 * kTraceDt);
+  auto shape = [&](double t) {
+    auto order = [&](double n, double shift) { return spindle_order(rpm, n, shift, t); };
+    return 0.02 + 0.01 * order(4, 0.5) + 0.006 * order(20, 1.0) + 0.004 * order(36, 0.3) +
+           0.003 * order(44, 2.0);
+  };
+  RunResult run = spindle_trace(rpm, 3000, shape);
+  auto largest_q = [](const std::vector<RevolutionChange>& changes) {
+    double most = 0;
+    for (size_t r = 2; r < changes.size(); ++r) {
+      EXPECT_TRUE(changes[r].comparable) << r;
+      most = std::max(most, changes[r].q);
+    }
+    return most;
+  };
+  const auto folded = vibration_change(run, 0.04, 4);
+  ASSERT_GE(folded.size(), 40u);
+  EXPECT_GT(largest_q(folded), 0.1) << "at the sample period the fold reads as change";
+  constexpr int kPer = 5;
+  run.vibration_per_sample = kPer;
+  for (const TraceSample& s : run.samples) {
+    for (int i = 0; i < kPer; ++i) {
+      run.vibration_sub_mm.push_back(shape(s.t_s - (kPer - 1 - i) * kTraceDt / kPer));
+    }
+  }
+  const auto fine = vibration_change(run, 0.04, 4);
+  ASSERT_EQ(fine.size(), folded.size()) << "the revolutions are the samples' still";
+  for (size_t r = 0; r < fine.size(); ++r) {
+    ASSERT_EQ(fine[r].first_sample, folded[r].first_sample) << r;
+  }
+  EXPECT_LT(largest_q(fine), 0.005);
+  // With a forced vibration (the twin label, one value a sample) the label
+  // reads the sample period.
+  const std::vector<double> none(run.samples.size(), 0.0);
+  EXPECT_NEAR(largest_q(vibration_change(run, 0.04, 4, &none)), largest_q(folded), 1e-12);
+}
+
+// A simulated mill whose wideband channel samples five times a period
+// gives its vibration at those instants too, and a run keeps it
+// (RunResult::vibration_sub_mm, the last of each sample its
+// vibration_y_mm) unless told not to; the summary's onset reads it. On the
+// paper's run without control, whose 2 mm pass chatters, the onset read
+// at 10 kHz is within a revolution of the one read at the sample period.
+TEST(ChatterLabel, ARunKeepsTheVibrationAtTheChannelsRate) {
+  const auto five = [](smc::config::SupervisorConfig& c) {
+    c.mutable_simulation()->set_f_y_wide_samples_per_tick(5);
+    c.mutable_operation()->set_wideband_samples_per_tick(5);
+  };
+  const auto fine = run_paper("no_control.textproto", {}, five);
+  RunOptions at_ticks;
+  at_ticks.keep_vibration_between_samples = false;
+  const auto coarse = run_paper("no_control.textproto", at_ticks, five);
+  const auto& samples = fine->run.samples;
+  ASSERT_EQ(fine->run.vibration_per_sample, 5);
+  ASSERT_EQ(fine->run.vibration_sub_mm.size(), 5 * samples.size());
+  ASSERT_EQ(coarse->run.samples.size(), samples.size());
+  for (size_t k = 0; k < samples.size(); ++k) {
+    ASSERT_EQ(fine->run.vibration_sub_mm[5 * k + 4], samples[k].vibration_y_mm) << k;
+    ASSERT_EQ(coarse->run.samples[k].vibration_y_mm, samples[k].vibration_y_mm) << k;
+  }
+  EXPECT_EQ(coarse->run.vibration_per_sample, 1);
+  EXPECT_TRUE(coarse->run.vibration_sub_mm.empty());
+  const double onset = fine->summary.chatter_onset_s();
+  ASSERT_GE(onset, 0) << "the 2 mm pass should chatter";
+  ASSERT_GE(coarse->summary.chatter_onset_s(), 0);
+  const double revolution_s = 60.0 / samples.back().spindle_rpm;
+  EXPECT_LE(std::fabs(onset - coarse->summary.chatter_onset_s()), revolution_s + 1e-9)
+      << onset << " against " << coarse->summary.chatter_onset_s();
 }
 
 // A gap in the vibration (LinuxCNC's first servo periods, before the

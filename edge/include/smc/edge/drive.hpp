@@ -24,6 +24,13 @@ struct DriveSample {
   // machine would need an extra sensor): NaN otherwise. Used only to find
   // chatter onset as ground truth in studies and run summaries.
   double vibration_y_mm = __builtin_nan("");
+  // The same vibration at the wideband channel's instants where that
+  // channel samples faster than the loop (the simulated mill only):
+  // `vibration_count` values, evenly spaced, oldest first, the last being
+  // vibration_y_mm. 0: at the sample period alone. The detector study's
+  // label reads the vibration at the rate module E reads its channel.
+  int vibration_count = 0;
+  double vibration_y_sub_mm[ForceSample::kMaxWideSamples] = {};
   // Share of the full-width engagement arc in cut (0 in air, 1 when the
   // cutter is fully in the part); NaN when the drive cannot tell.
   double engagement = __builtin_nan("");

@@ -35,6 +35,10 @@ struct RunOptions {
   double after_breakage_s = 1.0;
   bool keep_samples = true;   // keep the per-sample trace
   int sample_decimation = 1;  // keep every n-th sample
+  // Keep the vibration between samples where the drive gives it
+  // (DriveSample::vibration_count; RunResult::vibration_sub_mm), for the
+  // label. Only with every sample kept.
+  bool keep_vibration_between_samples = true;
 };
 
 // One kept sample of the trace.
@@ -67,6 +71,13 @@ struct RunResult {
   bool completed = false;
   double tool_broken_s = -1;  // module N's event, -1: none
   uint64_t ticks = 0;
+  // The vibration at the drive's faster rate, where it gives one
+  // (DriveSample::vibration_count, the same at every sample):
+  // vibration_per_sample values for each of `samples`, oldest first, the
+  // last of each being its vibration_y_mm. Empty (vibration_per_sample 1)
+  // otherwise: the label then reads the vibration at the sample period.
+  int vibration_per_sample = 1;
+  std::vector<double> vibration_sub_mm;
 };
 
 // Runs `core` (already start()ed) until its program is done or max_time_s.
@@ -79,7 +90,10 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run);
 // labels chatter independently of module E (the summary's chatter onset):
 // per revolution of the trace (by the spindle speed it records; at a still
 // spindle, still_period_s), q = RMS(v_k - v_k-1) / RMS(v_k) of the relative
-// tool-part vibration, whether it is comparable with the revolution before
+// tool-part vibration (at the run's vibration_per_sample times the sample
+// rate where it has the vibration between samples, as it does when the
+// simulated mill's wideband channel samples faster than the loop; at the
+// sample rate otherwise), whether it is comparable with the revolution before
 // (both fully in the cut, no hold, not leaving the part), and its onset
 // level: the largest threshold at which it would be the onset (above the
 // threshold and above the revolution before, then larger still -- or, after
@@ -102,7 +116,7 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run);
 // q is of the vibration regeneration adds, v - forced, still over RMS(v_k):
 // the change from one revolution to the next that the forced vibration does
 // not explain. The detector study's --twin-label; the summary's onset does
-// not use it.
+// not use it. With `forced` the label reads the sample rate alone.
 struct RevolutionChange {
   size_t first_sample = 0, end_sample = 0;  // [first, end) in RunResult::samples
   double q = 0;
