@@ -447,12 +447,13 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       // revolution, so q sees it only while it grows (from the first
       // hundredths of a per cent of a stable cut's energy to 0.9 and more of
       // it in the study's full-width cuts, q at 0.02-0.10 meanwhile). Its
-      // share above `flip` in two judged revolutions in a row (the label's
-      // onset asks for three: E decides on the second of them).
+      // share above `flip` in `flip_revolutions` judged revolutions in a
+      // row (2 shipped; the label's onset asks for three).
       s.chatter_vibration_flip = last_flip_;
       flip_above_ = last_flip_ > p_.chatter_vibration_flip ? flip_above_ + 1 : 0;
       if (rising || climbing || pausing || net || jumped || steep || confirmed ||
-          q_above_ >= kVibrationConfirm || flip_above_ >= kFlipConfirm) {
+          q_above_ >= kVibrationConfirm ||
+          flip_above_ >= std::max(1, p_.chatter_vibration_flip_revolutions)) {
         s.chatter_detected = true;
       }
       q3_ = q2_;
@@ -460,10 +461,15 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       q1_ = q;
       s2_ = s1_;
       s1_ = sq;
-    } else {
+    } else if (!(stepped && !leaving && std::isfinite(q) &&
+                 p_.chatter_vibration_keep_across_steps)) {
       q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
       q_above_ = flip_above_ = 0;
     }
+    // (Across a step, with keep_across_steps, the revolution is not judged
+    // and the rules' history is kept: chatter's own growth raises the mean
+    // F_z so, and forgetting the revolutions before it made E a revolution
+    // or two late on fast-growing chatter.)
   }
 
   if (!steady || leaving) {

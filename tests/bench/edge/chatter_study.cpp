@@ -10,7 +10,7 @@
 //       [--vibration-jump-dip X] [--vibration-steep X] [--vibration-steep-growth X]
 //       [--vibration-steep-from X] [--vibration-confirmed X]
 //       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-flip X]
-//       [--vibration-backup X]
+//       [--vibration-backup X] [--vibration-flip-revolutions N] [--vibration-keep-across-steps]
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
 //       [--wide-samples N] [--sample-period S] [--mill-model FILE] [--no-regeneration]
 //       [--twin-label] [--tick-label]
@@ -93,9 +93,9 @@
 // label's margin, E's q against the mill's and the label's rule on q with an
 // error into DIR (chatter_plots.hpp). Progress goes to stderr. --dump writes
 // every revolution of the labelling run (E's rules off) that E judged or
-// skipped in contact (statistic, q, engagement, feed, and the mill's own q
+// skipped in contact (statistic, q, engagement, feed, the mill's own q
 // on the trace's revolution that ends there, -1 where it is not
-// comparable) with its onset, to
+// comparable, and E's period-doubling share) with its onset, to
 // try other decision rules offline: what happens before E's first
 // detection does not depend on the rule. --threshold 1 switches E's rules
 // off in both runs (and runs each cut once). --dump-samples STEM writes
@@ -377,6 +377,15 @@ int main(int argc, char** argv) {
     }
     app.add_option(k.flag, k.value, help)->check(smc::bench::kNonNegative);
   }
+  int flip_revolutions = 0;  // 0: shipped
+  bool keep_across_steps = false;
+  app.add_option("--vibration-flip-revolutions", flip_revolutions,
+                 "the period-doubling rule's revolutions in a row (shipped: " +
+                     std::to_string(shipped.chatter_vibration_flip_revolutions) + ")")
+      ->check(CLI::Range(1, 10));
+  app.add_flag("--vibration-keep-across-steps", keep_across_steps,
+               "E's rules keep their last revolutions across one not judged for a step in the "
+               "mean F_z (shipped: they forget them)");
   app.add_option("--dump", dump_path,
                  "CSV of every revolution of the labelling runs (E's q, S, the mill's q), to try "
                  "rules offline");
@@ -425,7 +434,7 @@ int main(int argc, char** argv) {
     }
     std::fprintf(dump,
                  "run,rpm,width,runout,fraction,seed,onset_s,t_s,statistic,vibration_ratio,"
-                 "engagement,feed_per_tooth_mm,mill_q\n");
+                 "engagement,feed_per_tooth_mm,mill_q,flip\n");
   }
   const auto& speeds = grid.speeds;
   const auto& widths = grid.widths;
@@ -469,6 +478,8 @@ int main(int argc, char** argv) {
     for (const Knob& k : knobs) {
       if (k.value >= 0) ep.*k.field = k.value;
     }
+    if (flip_revolutions > 0) ep.chatter_vibration_flip_revolutions = flip_revolutions;
+    if (keep_across_steps) ep.chatter_vibration_keep_across_steps = true;
   };
   // E's rules off: the run that labels a cut.
   const bool e_muted = threshold_override >= 1;
@@ -520,8 +531,8 @@ int main(int argc, char** argv) {
         "%.0f%%, or rises three times in a row by more than x%.2f each from %.2f to past "
         "%.2f (to past %.2f where S, below, rose by more than x%.2f in each of the last two), "
         "or exceeds %.2f in 3; or when the estimate's share at the spindle orders halfway "
-        "between tooth harmonics (a period doubling) exceeds %.2f in 2; or when S, the "
-        "non-harmonic share of F_z energy, exceeds %.2f in 3",
+        "between tooth harmonics (a period doubling) exceeds %.2f in %d; or when S, the "
+        "non-harmonic share of F_z energy, exceeds %.2f in 3%s",
         shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
         shown.vibration_sensor_noise_rms_n, shown.chatter_vibration_rise,
         shown.chatter_vibration_climb, shown.chatter_vibration_pause,
@@ -532,7 +543,10 @@ int main(int argc, char** argv) {
         shown.chatter_vibration_steep_from, shown.chatter_vibration_steep,
         shown.chatter_vibration_confirmed, shown.chatter_vibration_confirmed_growth,
         shown.chatter_vibration_level, shown.chatter_vibration_flip,
-        shown.chatter_vibration_backup);
+        shown.chatter_vibration_flip_revolutions, shown.chatter_vibration_backup,
+        shown.chatter_vibration_keep_across_steps
+            ? " (q's rules keep their history across a step in the mean F_z)"
+            : "");
   } else {
     std::printf(
         "module E: threshold %.2f on S, the non-harmonic share of F_z energy, %d revolutions "
@@ -810,10 +824,11 @@ int main(int argc, char** argv) {
               for (size_t i = 0; i < labelled.revolutions.size(); ++i) {
                 const auto& r = labelled.revolutions[i];
                 if ((r.active & bit(ModuleId::E)) == 0 || !r.contact) continue;
-                std::fprintf(dump, "%d,%.0f,%.0f,%.0f,%.2f,%d,%.4f,%.4f,%.5f,%.5f,%.4f,%.5f,%.5f\n",
+                std::fprintf(dump,
+                             "%d,%.0f,%.0f,%.0f,%.2f,%d,%.4f,%.4f,%.5f,%.5f,%.4f,%.5f,%.5f,%.5f\n",
                              run_id, rpm, width, runout, fraction, seed, onset, r.t_s,
                              r.chatter_ratio, r.chatter_vibration_ratio, r.engagement_min,
-                             r.feed_per_tooth_mm, mill_q[i]);
+                             r.feed_per_tooth_mm, mill_q[i], r.chatter_vibration_flip);
               }
             }
             if (raw_runs != nullptr) {

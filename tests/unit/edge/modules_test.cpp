@@ -1889,10 +1889,79 @@ TEST(AutomaticChatterDetector, APeriodDoublingIsChatterThoughEveryRevolutionRepe
   no_rule.chatter_vibration_flip = 2;
   std::vector<double> f2, q2;
   EXPECT_EQ(run(no_rule, 150, 0, &f2, &q2), -1) << "without the rule no other fires";
+  // Asked for three revolutions in a row, as the label's onset does: the third.
+  EdgeParameters three = p;
+  three.chatter_vibration_flip_revolutions = 3;
+  std::vector<double> f4, q4;
+  EXPECT_EQ(run(three, 150, 0, &f4, &q4), 2) << "the third judged revolution";
   std::vector<double> f3, q3;
   EXPECT_EQ(run(p, 0, 50, &f3, &q3), -1) << "runout is no period doubling";
   ASSERT_FALSE(f3.empty());
   for (const double x : f3) EXPECT_LT(x, 0.01);
+}
+
+// Chatter's own growth can raise the mean F_z by more than a tenth beyond
+// the engagement's rise, which E reads as a step in the cut: it does not
+// judge that revolution. Shipped, its rules also forget the revolutions
+// before it, so a growth that steps so is caught only once three more are
+// judged; with keep_across_steps they compare across it, and E fires on
+// the first judged revolution after the step (edge/CHATTER.md, "Judging
+// through a step in the cut"). A step in a cut that repeats itself is no
+// chatter either way.
+TEST(AutomaticChatterDetector, KeepingItsHistoryAcrossAStepCatchesGrowthSooner) {
+  // The revolution E first detects chatter on (-1: none); F_z's mean steps
+  // from 300 N to 345 N on revolution `step` and stays there.
+  auto run = [](const EdgeParameters& p, std::initializer_list<double> chatter, int step,
+                std::vector<double>* q) {
+    AutomaticChatterDetector e;
+    e.configure(p);
+    int k0 = 0, r = -6;
+    auto revolution = [&](double amplitude) {
+      Signals s;
+      s.spindle_rpm = 1500;
+      s.engagement = 1;
+      s.revolution_samples = p.samples_per_revolution;
+      const double mean = r >= step ? 345 : 300;
+      for (int k = 0; k < p.samples_per_revolution; ++k, ++k0) {
+        const double t = k0 * p.sample_period_s;
+        auto wave = [&](double hz, double phase) {
+          return std::sin(2 * std::numbers::pi * hz * t + phase);
+        };
+        s.sample.f_z_n = mean + 80 * wave(100, 0);
+        s.sample.f_y_wide_n = 400 + 150 * wave(100, 0.5) + amplitude * wave(640, 0.2);
+        e.on_sample(s);
+      }
+      e.update(s);
+      ++r;
+      return s;
+    };
+    for (int i = 0; i < 6; ++i) revolution(0);
+    for (const double amplitude : chatter) {
+      const Signals s = revolution(amplitude);
+      q->push_back(s.chatter_vibration_ratio);
+      if (s.chatter_detected) return r - 1;
+    }
+    return -1;
+  };
+  const EdgeParameters forget = with_y_modes(params());
+  EdgeParameters keep = forget;
+  keep.chatter_vibration_keep_across_steps = true;
+  const std::initializer_list<double> growth{14, 40, 70, 90, 110, 130, 150};
+  std::vector<double> q_forget, q_keep;
+  const int forgot = run(forget, growth, 2, &q_forget);
+  const int kept = run(keep, growth, 2, &q_keep);
+  ASSERT_GE(q_keep.size(), 4u);
+  EXPECT_EQ(q_keep[2], 0) << "the step's revolution is not judged";
+  EXPECT_EQ(q_forget[2], 0);
+  EXPECT_GT(q_keep[1], keep.chatter_vibration_rise) << "above the rise before the step";
+  EXPECT_EQ(kept, 3) << "the first judged revolution after the step";
+  EXPECT_TRUE(forgot < 0 || forgot > kept) << forgot;
+  // Without the step both fire where the growth's second rise is.
+  std::vector<double> a, b;
+  EXPECT_EQ(run(keep, growth, 100, &a), run(forget, growth, 100, &b));
+  // A step in a cut that repeats itself: no decision.
+  std::vector<double> c;
+  EXPECT_EQ(run(keep, {0, 0, 0, 0, 0, 0}, 2, &c), -1);
 }
 
 // The same period doubling where a revolution is not a whole number of

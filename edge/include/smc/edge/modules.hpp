@@ -160,7 +160,6 @@ class AutomaticChatterDetector final : public Module {
   double most_engaged_ = 0;     // and the most it reached since it last rose
   static constexpr double kMaxMeanChange = 0.1;
   static constexpr int kVibrationConfirm = 3;  // `level` and `backup`: revolutions in a row
-  static constexpr int kFlipConfirm = 2;       // `flip`: revolutions in a row
 
   // The vibration estimate: per y mode its exact zero-order-hold
   // discretisation at the wideband channel's sample period and its state

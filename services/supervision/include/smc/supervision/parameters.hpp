@@ -145,7 +145,7 @@ struct Parameters {
   // `confirmed_growth` x in each of the last two (the two channels' evidence
   // together); or exceeds `level` in three in a row; or when the estimated
   // vibration's share at the spindle orders halfway between tooth harmonics
-  // exceeds `flip` in three (a period doubling, with an even number of
+  // exceeds `flip` in `flip_revolutions` in a row (a period doubling, with an even number of
   // teeth, repeats every revolution: q sees it only while it grows); or when
   // F_z's non-harmonic share exceeds `backup` in three (chatter locked to a
   // spindle harmonic repeats every revolution, and only F_z's spectrum shows
@@ -167,7 +167,14 @@ struct Parameters {
   double chatter_vibration_confirmed_growth = 1.2;
   double chatter_vibration_level = 0.8;
   double chatter_vibration_flip = 0.5;
+  int chatter_vibration_flip_revolutions = 2;
   double chatter_vibration_backup = 0.7;
+  // A revolution not judged because the mean F_z rose by more than a tenth
+  // beyond the engagement's rise (a step in the cut, or chatter's own
+  // growth): false forgets the rules' last revolutions there, true keeps
+  // them, so the rules compare across it (edge/CHATTER.md, "Judging through
+  // a step in the cut").
+  bool chatter_vibration_keep_across_steps = false;
 
   // Derived, in samples.
   int samples_per_fast = 0;
