@@ -812,12 +812,23 @@ int main(int argc, char** argv) {
             }
             if (onset < 0) {
               // E's period-doubling share in a stable cut, as its rule
-              // counts it: the lesser of two judged revolutions in a row.
-              double b = 0;
+              // counts it: the least of as many judged revolutions in a
+              // row as the rule asks for.
+              const auto in_a_row =
+                  static_cast<size_t>(std::max(1, shown.chatter_vibration_flip_revolutions));
+              std::vector<double> judged;  // the shares of the judged revolutions in a row
               for (const auto& r : labelled.revolutions) {
                 const double f = r.chatter_vibration_flip;
-                if (f > 0 && b > 0) stable_e_flip = std::max(stable_e_flip, std::min(b, f));
-                b = f;
+                if (!(f > 0)) {
+                  judged.clear();
+                  continue;
+                }
+                judged.push_back(f);
+                if (judged.size() >= in_a_row) {
+                  stable_e_flip = std::max(
+                      stable_e_flip,
+                      *std::min_element(judged.end() - static_cast<long>(in_a_row), judged.end()));
+                }
               }
             }
             if (dump != nullptr) {
@@ -1018,9 +1029,10 @@ int main(int argc, char** argv) {
         "%.4f (threshold %.2f)\n",
         stable_flip, unstable_flip < HUGE_VAL ? unstable_flip : 0.0, kChatterOnsetFlip);
     std::printf(
-        "E's period-doubling share: in stable cuts at most %.4f (the lesser of two in a row; "
-        "E's rule %.2f)",
-        stable_e_flip, shown.chatter_vibration_flip);
+        "E's period-doubling share: in stable cuts at most %.4f (the least of %d in a row; "
+        "E's rule %.2f in %d)",
+        stable_e_flip, shown.chatter_vibration_flip_revolutions, shown.chatter_vibration_flip,
+        shown.chatter_vibration_flip_revolutions);
     if (!flip_error.empty()) {
       std::sort(flip_error.begin(), flip_error.end());
       auto pct = [&](double f) {
