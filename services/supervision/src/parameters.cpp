@@ -276,6 +276,7 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
   }
 
   if (!sample_ok) return p;  // the derived counts need a sample period
+  set_vibration_rules_for_channel(p, vibration_channel_rate_hz(p));
   // A count of sample periods, refused past kMaxCount (a day at 2 kHz: no
   // period of the edge is near it, and an int must hold it).
   constexpr double kMaxCount = 2e8;
@@ -319,6 +320,41 @@ Parameters read_parameters(const smc::config::SupervisorConfig& cfg,
     }
   }
   return p;
+}
+
+double vibration_channel_rate_hz(const Parameters& p) noexcept {
+  return p.sample_period_s > 0 ? p.vibration_samples_per_tick / p.sample_period_s : 0;
+}
+
+void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noexcept {
+  const Parameters loop_rate;  // the defaults: the set chosen at 2 kHz
+  // Only the rules that differ between the two sets; the others keep the
+  // loop-rate values in both.
+  p.chatter_vibration_rise = loop_rate.chatter_vibration_rise;
+  p.chatter_vibration_pause = loop_rate.chatter_vibration_pause;
+  p.chatter_vibration_climb = loop_rate.chatter_vibration_climb;
+  p.chatter_vibration_growth = loop_rate.chatter_vibration_growth;
+  p.chatter_vibration_flip_revolutions = loop_rate.chatter_vibration_flip_revolutions;
+  p.chatter_vibration_keep_across_steps = loop_rate.chatter_vibration_keep_across_steps;
+  // A rate a hair under 10 kHz from the division is still 10 kHz.
+  if (channel_rate_hz >= kFineChannelRateHz * (1 - 1e-9)) {
+    // Chosen on the detector study's grid and full runs at 10 kHz with the
+    // label at the same rate, with no false detection allowed on either
+    // (edge/CHATTER.md, "Label and channel at 10 kHz"). E reads q within
+    // 1-3 % of the mill's there, so the rules can sit at the label's own
+    // threshold (0.15) and take any growth; a period doubling must hold three
+    // revolutions, as stable cuts' halfway orders reach the flip level for two.
+    // The rules forget their history across a step in the cut, as at 2 kHz:
+    // kept, they gained a few late cuts in the study, and on a re-cut after a
+    // rewrite (a step in the depth within the pass) compared the revolution
+    // before the step with K's cut in the feed after it and read it as chatter.
+    p.chatter_vibration_rise = 0.15;
+    p.chatter_vibration_pause = 0.155;
+    p.chatter_vibration_climb = 0.15;
+    p.chatter_vibration_growth = 1.0;
+    p.chatter_vibration_flip_revolutions = 3;
+    p.chatter_vibration_keep_across_steps = false;
+  }
 }
 
 Parameters parameters_from_config(const smc::config::SupervisorConfig& cfg) {

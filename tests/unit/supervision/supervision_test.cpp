@@ -130,6 +130,52 @@ TEST(Parameters, TheWidebandRateDefaultsToTheLoopsAndABadOneIsRefused) {
       << why;
 }
 
+// Module E's rules follow the wideband channel's rate: at the loop's 2 kHz
+// (and up to just under 10 kHz) the set chosen there, the parameters'
+// defaults; from 10 kHz (five samples of 0.5 ms, or four of 0.4
+// ms) the set chosen at 10 kHz, rise at the label's 0.15 and three
+// revolutions of a period doubling. The rules that are the same in both sets
+// stay as they are.
+TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
+  const sv::Parameters defaults;
+  auto cfg = shipped("smc2.textproto");
+  cfg.mutable_operation()->set_wideband_samples_per_tick(1);  // the loop's rate
+  const auto loop = sv::parameters_from_config(cfg);
+  EXPECT_EQ(sv::vibration_channel_rate_hz(loop), 2000);
+  EXPECT_EQ(loop.chatter_vibration_rise, defaults.chatter_vibration_rise);
+  EXPECT_EQ(loop.chatter_vibration_flip_revolutions, defaults.chatter_vibration_flip_revolutions);
+  EXPECT_FALSE(loop.chatter_vibration_keep_across_steps);
+  auto fine_rules = [](const sv::Parameters& p) {
+    return p.chatter_vibration_rise == 0.15 && p.chatter_vibration_pause == 0.155 &&
+           p.chatter_vibration_climb == 0.15 && p.chatter_vibration_growth == 1.0 &&
+           p.chatter_vibration_flip_revolutions == 3;
+  };
+  EXPECT_FALSE(fine_rules(loop));
+  cfg.mutable_operation()->set_wideband_samples_per_tick(4);  // 8 kHz
+  EXPECT_FALSE(fine_rules(sv::parameters_from_config(cfg)));
+  cfg.mutable_operation()->set_wideband_samples_per_tick(5);  // 10 kHz
+  const auto fine = sv::parameters_from_config(cfg);
+  EXPECT_EQ(sv::vibration_channel_rate_hz(fine), 10000);
+  EXPECT_TRUE(fine_rules(fine));
+  EXPECT_EQ(fine.chatter_vibration_jump, defaults.chatter_vibration_jump);
+  EXPECT_EQ(fine.chatter_vibration_flip, defaults.chatter_vibration_flip);
+  EXPECT_EQ(fine.chatter_vibration_backup, defaults.chatter_vibration_backup);
+  // Forgets its history across a step in the cut at both rates: kept, it
+  // read K's cut in the feed after a re-cut's step as chatter.
+  EXPECT_FALSE(fine.chatter_vibration_keep_across_steps);
+  cfg.mutable_operation()->set_sample_period_s(0.0004);  // 4 a period of 0.4 ms: 10 kHz
+  cfg.mutable_operation()->set_wideband_samples_per_tick(4);
+  const auto also_fine = sv::parameters_from_config(cfg);
+  EXPECT_NEAR(sv::vibration_channel_rate_hz(also_fine), 10000, 1e-6);
+  EXPECT_TRUE(fine_rules(also_fine));
+  // And back: a set applied for a slower channel restores the loop's rules.
+  auto p = fine;
+  sv::set_vibration_rules_for_channel(p, 2000);
+  EXPECT_FALSE(fine_rules(p));
+  EXPECT_EQ(p.chatter_vibration_rise, defaults.chatter_vibration_rise);
+  EXPECT_EQ(p.chatter_vibration_growth, defaults.chatter_vibration_growth);
+}
+
 TEST(Parameters, TheWidebandNoiseIsTheShippedChannelsAndABadOneIsRefused) {
   auto cfg = shipped("smc2.textproto");
   EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_noise_rms_n, 2);

@@ -127,7 +127,10 @@ struct Parameters {
   int vibration_samples_per_tick = 1;
   // Module E's rules on the estimated vibration's change from one revolution
   // to the next (not in the configuration message: the detector study's
-  // values; the study overrides them to try others). Chatter when it exceeds
+  // values; the study overrides them to try others). The values below are
+  // those chosen for a channel at the loop's rate; read_parameters replaces
+  // them with the set chosen for a channel at kFineChannelRateHz when the
+  // channel is that fast (set_vibration_rules_for_channel). Chatter when it exceeds
   // `rise` and grows, then grows again, over judged revolutions; or exceeds
   // `climb` and grows three times in a row; or exceeds `pause` and grows,
   // stays above it a revolution, then passes where it grew to (growing: by
@@ -192,6 +195,19 @@ struct Parameters {
   double feedrate_for(double feed_per_tooth_mm, double spindle_rpm) const noexcept;
   double feed_per_tooth_for(double feedrate_mm_s, double spindle_rpm) const noexcept;
 };
+
+// The wideband F_y channel's rate (samples a second) from which module E's
+// rules are those chosen for a channel that reads the vibration between the
+// loop's samples (edge/CHATTER.md, "Label and channel at 10 kHz"); below it,
+// those chosen at the loop's 2 kHz. Only those two rates were measured; in
+// between, the 2 kHz set (measured at 10 kHz too: no false detection, a few
+// cuts caught later than with the 10 kHz set).
+inline constexpr double kFineChannelRateHz = 10000;
+// The channel's rate of `p` (vibration_samples_per_tick / sample_period_s).
+double vibration_channel_rate_hz(const Parameters& p) noexcept;
+// Sets module E's vibration rules to the set chosen for a channel at
+// `channel_rate_hz` (above). Leaves every other parameter alone.
+void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noexcept;
 
 // Reads and checks every field the modules use, collecting every problem in
 // `problems` (field paths under "supervisor_config."). The result is only
