@@ -49,17 +49,20 @@
 // noise E takes out with it unless --vibration-noise says otherwise; 0 shows
 // what E's estimate does without it. --wide-cutoff HZ and --wide-order N:
 // the simulated wideband F_y channel's anti-alias filter (a Butterworth,
-// even order 2-8; the configuration's 500 Hz, second order) and what E is
+// even order 2-8; the configuration's 3.5 kHz, eighth order) and what E is
 // told of it. --sample-period S: the edge samples every S seconds
 // (operation.sample_period_s; the configuration's 0.0005, the paper's 2 kHz),
-// and so do the wideband channel E reads and the vibration the label reads;
-// 0.00025 shows what E and the label make of a channel sampled twice as
-// fast. --wide-samples N: the wideband channel alone samples N times a
-// sample period (simulation.f_y_wide_samples_per_tick and
-// operation.wideband_samples_per_tick; 2 or 5 at 0.5 ms): E reads it at that
-// rate while the loop and F_z stay at the sample period, and the label reads
-// the mill's vibration at the channel's rate too (RunResult::vibration_sub_mm)
-// unless --tick-label keeps it at the sample period.
+// and the wideband channel E reads and the vibration the label reads are
+// sampled that many times a period; with --wide-samples 1, 0.00025 shows
+// what E and the label make of a channel sampled twice as fast.
+// --wide-samples N: the wideband channel alone samples N times a sample
+// period (simulation.f_y_wide_samples_per_tick and
+// operation.wideband_samples_per_tick; the configuration's 5, 10 kHz at 0.5
+// ms; 1 is the paper's rate): E reads it at that rate while the loop and F_z
+// stay at the sample period, E's rules are the set chosen for that rate
+// (set_vibration_rules_for_channel), and the label reads the mill's
+// vibration at the channel's rate too (RunResult::vibration_sub_mm) unless
+// --tick-label keeps it at the sample period.
 // --mill-model FILE: the
 // simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
@@ -342,8 +345,8 @@ int main(int argc, char** argv) {
                "feed replayed on the same mill without regeneration, and the label's q of the "
                "difference (the mill's q in the figures below is that q too)");
   app.add_flag("--tick-label", tick_label,
-               "with --wide-samples: the label reads the mill's vibration at the sample "
-               "period, not at the channel's rate");
+               "with the wideband channel faster than the loop (as shipped): the label reads the "
+               "mill's vibration at the sample period, not at the channel's rate");
   app.add_option("--threshold", threshold_override,
                  "S's threshold (alone; 1 or more switches E's rules off in both runs, and each "
                  "cut runs once)")
@@ -355,25 +358,35 @@ int main(int argc, char** argv) {
                  "(the configuration's 2)")
       ->check(smc::bench::kNonNegative);
   app.add_option("--wide-cutoff", wide_cutoff,
-                 "the wideband F_y channel's filter, Hz, and what E is told of it (500)")
+                 "the wideband F_y channel's filter, Hz, and what E is told of it (the "
+                 "configuration's 3500)")
       ->check(smc::bench::kPositive);
-  app.add_option("--wide-order", wide_order, "that filter's order, even, 2-8 (2)")
+  app.add_option("--wide-order", wide_order,
+                 "that filter's order, even, 2-8 (the configuration's 8)")
       ->check(CLI::Range(2, 8));
   app.add_option("--wide-samples", wide_samples,
-                 "the wideband F_y channel's samples per sample period, and E's (1)")
+                 "the wideband F_y channel's samples per sample period, and E's, whose rules "
+                 "follow the channel's rate (the configuration's 5)")
       ->check(CLI::Range(1, 8));
   app.add_option("--sample-period", sample_period,
                  "the edge's sample period, s, and the channel's and the label's (0.0005)")
       ->check(smc::bench::kPositive);
-  const EdgeParameters shipped;
+  // E's rules follow the channel's rate: the set chosen at 10 kHz (the
+  // configuration's) and the one chosen at the loop's 2 kHz.
+  EdgeParameters shipped;
+  smc::supervision::set_vibration_rules_for_channel(shipped, smc::supervision::kFineChannelRateHz);
+  const EdgeParameters at_loop;
   for (Knob& k : knobs) {
-    char help[160];
+    char help[200];
     // The channel's noise comes from the configuration, the rules from
-    // the parameters' defaults.
+    // the channel's rate.
     if (k.field == &EdgeParameters::vibration_sensor_noise_rms_n) {
       std::snprintf(help, sizeof help, "%s", k.what);
-    } else {
+    } else if (shipped.*k.field == at_loop.*k.field) {
       std::snprintf(help, sizeof help, "%s (shipped: %g)", k.what, shipped.*k.field);
+    } else {
+      std::snprintf(help, sizeof help, "%s (shipped: %g at 10 kHz, %g at 2 kHz)", k.what,
+                    shipped.*k.field, at_loop.*k.field);
     }
     app.add_option(k.flag, k.value, help)->check(smc::bench::kNonNegative);
   }
@@ -381,7 +394,8 @@ int main(int argc, char** argv) {
   bool keep_across_steps = false;
   app.add_option("--vibration-flip-revolutions", flip_revolutions,
                  "the period-doubling rule's revolutions in a row (shipped: " +
-                     std::to_string(shipped.chatter_vibration_flip_revolutions) + ")")
+                     std::to_string(shipped.chatter_vibration_flip_revolutions) + " at 10 kHz, " +
+                     std::to_string(at_loop.chatter_vibration_flip_revolutions) + " at 2 kHz)")
       ->check(CLI::Range(1, 10));
   app.add_flag("--vibration-keep-across-steps", keep_across_steps,
                "E's rules keep their last revolutions across one not judged for a step in the "

@@ -528,11 +528,19 @@ Signals wide_revolution(AutomaticChatterDetector& e, const EdgeParameters& p, in
 // The paper mill's y modes (cell/models/paper_face_mill.textproto), as the
 // shipped configurations give them to E.
 // The synthetic channels here are noise-free: E takes no noise out.
+// E with the structure's two modes in y, behind the wideband channel at the
+// loop's rate (one sample a period through a second order at 500 Hz, as the
+// configurations shipped it before the 10 kHz channel) and the rules chosen
+// for that rate: the revolutions below bring one wideband sample a period.
 EdgeParameters with_y_modes(EdgeParameters p) {
   p.vibration_mode_count = 2;
   p.vibration_modes[0] = {4100, 0.11, 14000};
   p.vibration_modes[1] = {2100, 0.22, 9500};
   p.vibration_sensor_noise_rms_n = 0;
+  p.vibration_samples_per_tick = 1;
+  p.vibration_sensor_cutoff_hz = 500;
+  p.vibration_sensor_order = 2;
+  smc::supervision::set_vibration_rules_for_channel(p, 1 / p.sample_period_s);
   return p;
 }
 
@@ -701,11 +709,11 @@ TEST(AutomaticChatterDetector, ASlowlyGrowingVibrationIsChatterBeforeItReachesTh
 // the simulated mill's filter run at that rate, and q of the sampled
 // vibration is the truth E must read.
 TEST(AutomaticChatterDetector, TheEstimateReadsTheStructuresOwnChatterShare) {
-  // The shipped channel (second order at 500 Hz: 1.3 %), a steeper one
-  // (eighth order at 800 Hz, operation.wideband_filter_order: 4.0 %; 17 %
-  // when E takes it for a second order), and one sampled five times a
-  // period (operation.wideband_samples_per_tick) behind an eighth order at
-  // 3.5 kHz, well above the modes.
+  // The channel at the loop's rate (second order at 500 Hz: 1.3 %), a
+  // steeper one (eighth order at 800 Hz, operation.wideband_filter_order:
+  // 4.0 %; 17 % when E takes it for a second order), and the shipped one,
+  // sampled five times a period (operation.wideband_samples_per_tick) behind
+  // an eighth order at 3.5 kHz, well above the modes.
   for (const auto& [cutoff_hz, order, per_tick, within] :
        {std::tuple{500.0, 2, 1, 0.1}, std::tuple{800.0, 8, 1, 0.1},
         std::tuple{3500.0, 8, 5, 0.02}}) {

@@ -542,13 +542,14 @@ TEST(Faults, ModuleErrorHoldsTheFeedAndNamesTheModule) {
                                        static_cast<int>(ModuleId::L)});
 }
 
-// A dynamometer whose wideband channel samples five times a period, under a
-// configuration that tells E once (operation.wideband_samples_per_tick): E
-// fails on the first such sample it takes, the feed is held from there to
-// the end of the run, and the run's summary names module E.
+// A dynamometer whose wideband channel samples once a period, under a
+// configuration that tells E five times (operation.wideband_samples_per_tick,
+// as shipped): E fails on the first such sample it takes, the feed is held
+// from there to the end of the run, and the run's summary names module E.
 TEST(Faults, AWidebandChannelAtAnotherRateHoldsTheFeedAndNamesModuleE) {
   auto r = run_paper("smc2.textproto", {}, [](smc::config::SupervisorConfig& c) {
-    c.mutable_simulation()->set_f_y_wide_samples_per_tick(5);
+    ASSERT_EQ(c.operation().wideband_samples_per_tick(), 5u);
+    c.mutable_simulation()->set_f_y_wide_samples_per_tick(1);
   });
   EXPECT_FALSE(r->summary.completed());
   ASSERT_EQ(r->summary.faults_size(), 1) << smc::documents::to_json(r->summary);

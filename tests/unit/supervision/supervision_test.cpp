@@ -105,6 +105,8 @@ TEST(Parameters, TheWidebandCutoffDefaultsToTheFzChannelsAndABadOneIsRefused) {
 // or one above 8, is refused naming the field.
 TEST(Parameters, TheWidebandFilterOrderDefaultsToTheSecondAndABadOneIsRefused) {
   auto cfg = shipped("smc2.textproto");
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_order, 8) << "the shipped channel's";
+  cfg.mutable_operation()->set_wideband_filter_order(0);
   EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_order, 2);
   cfg.mutable_operation()->set_wideband_filter_order(8);
   EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_order, 8);
@@ -132,7 +134,7 @@ TEST(Parameters, TheWidebandRateDefaultsToTheLoopsAndABadOneIsRefused) {
 
 // Module E's rules follow the wideband channel's rate: at the loop's 2 kHz
 // (and up to just under 10 kHz) the set chosen there, the parameters'
-// defaults; from 10 kHz (five samples of 0.5 ms, or four of 0.4
+// defaults; from 10 kHz (five samples of 0.5 ms, as shipped, or four of 0.4
 // ms) the set chosen at 10 kHz, rise at the label's 0.15 and three
 // revolutions of a period doubling. The rules that are the same in both sets
 // stay as they are.
@@ -179,8 +181,11 @@ TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
 TEST(Parameters, TheWidebandNoiseIsTheShippedChannelsAndABadOneIsRefused) {
   auto cfg = shipped("smc2.textproto");
   EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_noise_rms_n, 2);
-  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_cutoff_hz, 500);
-  EXPECT_EQ(cfg.simulation().f_y_wide_cutoff_hz(), 500) << "the simulated channel E is told of";
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_cutoff_hz, 3500);
+  EXPECT_EQ(cfg.simulation().f_y_wide_cutoff_hz(), 3500) << "the simulated channel E is told of";
+  EXPECT_EQ(cfg.simulation().f_y_wide_order(), 8);
+  EXPECT_EQ(cfg.simulation().f_y_wide_samples_per_tick(), 5);
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_samples_per_tick, 5);
   cfg.mutable_operation()->set_wideband_noise_rms_n(0);
   EXPECT_EQ(sv::parameters_from_config(cfg).vibration_sensor_noise_rms_n, 0) << "none taken out";
   for (const double bad : {-1.0, std::nan(""), 1e4}) {
