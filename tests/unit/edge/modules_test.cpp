@@ -526,12 +526,11 @@ Signals wide_revolution(AutomaticChatterDetector& e, const EdgeParameters& p, in
 }
 
 // The paper mill's y modes (cell/models/paper_face_mill.textproto), as the
-// shipped configurations give them to E.
-// The synthetic channels here are noise-free: E takes no noise out.
-// E with the structure's two modes in y, behind the wideband channel at the
+// shipped configurations give them to E, behind the wideband channel at the
 // loop's rate (one sample a period through a second order at 500 Hz, as the
-// configurations shipped it before the 10 kHz channel) and the rules chosen
+// configurations shipped it before the 10 kHz channel) with the rules chosen
 // for that rate: the revolutions below bring one wideband sample a period.
+// The synthetic channels here are noise-free: E takes no noise out.
 EdgeParameters with_y_modes(EdgeParameters p) {
   p.vibration_mode_count = 2;
   p.vibration_modes[0] = {4100, 0.11, 14000};
