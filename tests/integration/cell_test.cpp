@@ -226,6 +226,9 @@ TEST_F(Cell, DemoJobsCompleteWithTheExpectedSmcChoice) {
   ASSERT_TRUE(b.result.has_value());
   EXPECT_GE(b.result->chatter_events(), 1u) << "the job-shop job should chatter and be suppressed";
   EXPECT_EQ(b.result->passes_completed(), 2u) << "one pass added by the suppressor";
+  EXPECT_EQ(b.result->passes_planned(), 1u);
+  EXPECT_EQ(b.result->program_rewrites(), 1u);
+  EXPECT_EQ(a.result->program_rewrites(), 0u);
   EXPECT_EQ(a.result->chatter_events(), 0u);
   EXPECT_EQ(a.attempt, 1u);
   EXPECT_EQ(b.attempt, 1u);
@@ -330,6 +333,9 @@ TEST_F(Cell, ChatterUnderSmcIMarksItsModelsSuspectAndThePartMovesToAMachineWhose
   ASSERT_TRUE(a.result.has_value());
   EXPECT_GE(a.result->chatter_events(), 1u) << "the mismatched mill chatters at the planned depth";
   EXPECT_GT(a.result->passes_completed(), 2u) << "the suppressor added a pass";
+  EXPECT_EQ(a.result->passes_planned(), 2u);
+  EXPECT_EQ(a.result->program_rewrites(), a.result->passes_completed() - 2)
+      << "one rewrite a pass added";
   bool noted = false;
   for (const auto& e : events(first)) {
     noted = noted || (e.is_note() && e.reason.find("marked suspect") != std::string::npos);
