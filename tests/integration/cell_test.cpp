@@ -336,6 +336,32 @@ TEST_F(Cell, ChatterUnderSmcIMarksItsModelsSuspectAndThePartMovesToAMachineWhose
   EXPECT_EQ(a.result->passes_planned(), 2u);
   EXPECT_EQ(a.result->program_rewrites(), a.result->passes_completed() - 2)
       << "one rewrite a pass added";
+  {
+    // The mill cut the job as smc-edge simulate cuts its configuration on
+    // the same mill: the edge's modules know the cell's models, the
+    // mismatched mill's are the simulated mill's alone (module E's
+    // vibration estimate with the mill's own structure detected the chatter
+    // a revolution sooner, and the re-cut differed from there).
+    const std::string conf = (dir_ / "first.textproto").string();
+    {
+      std::ofstream f(conf);
+      f << output_of(
+          {bin("smc-cell"), "--log-level", "off", "job", "show", first, "--config", "--db", db_});
+    }
+    const std::string out = (dir_ / "first-simulated").string();
+    ASSERT_EQ(
+        run_cmd({bin("smc-edge"), "simulate", "--config", conf, "--mill-model",
+                 src("cell/models/paper_face_mill_mismatched.textproto"), "--out", out, "--quiet"}),
+        0);
+    cfg::RunSummary sim;
+    smc::documents::load(out + "/summary.json", sim);
+    EXPECT_EQ(a.result->chatter_events(), sim.chatter_events());
+    EXPECT_EQ(a.result->passes_completed(), sim.passes_completed());
+    EXPECT_EQ(a.result->program_rewrites(), sim.program_rewrites());
+    EXPECT_NEAR(a.result->peak_force_n(), sim.peak_force_n(), 0.01);
+    // (The edge reports its machine time at the telemetry's rate.)
+    EXPECT_NEAR(a.result->cycle_time_s(), sim.cycle_time_s(), 0.04);
+  }
   bool noted = false;
   for (const auto& e : events(first)) {
     noted = noted || (e.is_note() && e.reason.find("marked suspect") != std::string::npos);

@@ -172,10 +172,15 @@ struct EdgeService::Impl {
   // hold up operator commands), applied back on the comms thread.
   void apply_checked_configs();
   void refuse(const std::string& config_id, const std::string& why);
-  // The mill's own model (--mill-model) machines the job's part: the
-  // configuration's cutter and part geometry, the mill's cutting law and
-  // structure. Without --mill-model the configuration's model is used.
-  void use_mill_model(smc::config::SupervisorConfig& cfg) const;
+  // The simulated mill that cuts a job of this configuration: the mill's
+  // own model (--mill-model) machines the job's part (the configuration's
+  // cutter and part geometry, the mill's cutting law and structure), with
+  // --break-tooth's breaks. Without --mill-model, the configuration's model.
+  // The configuration itself is left as the cell sent it: the edge's modules
+  // know the cell's models, never the plant's (module E's vibration
+  // estimate uses the configuration's structure, as on a real machine).
+  std::unique_ptr<SimulatedMill> simulated_mill(const smc::config::SupervisorConfig& cfg,
+                                                double sample_period_s) const;
   // Full check: everything the job would build, built now.
   std::string check(smc::config::SupervisorConfig& cfg);
   void take_configs();

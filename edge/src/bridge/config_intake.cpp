@@ -73,17 +73,22 @@ void ConfigIntake::run() {
 
 // ------------------------------------------------------- the comms side --
 
-void EdgeService::Impl::use_mill_model(smc::config::SupervisorConfig& cfg) const {
+std::unique_ptr<SimulatedMill> EdgeService::Impl::simulated_mill(
+    const smc::config::SupervisorConfig& cfg, double sample_period_s) const {
+  smc::config::MillingModel model = cfg.milling_model();
+  smc::config::SimulatedMill sim = cfg.simulation();
   for (const auto& b : opt.tooth_breaks) {
-    auto* t = cfg.mutable_simulation()->add_tooth_breaks();
+    auto* t = sim.add_tooth_breaks();
     t->set_tooth(b.tooth);
     t->set_at_s(b.at_s);
     t->set_edge_loss_mm(b.edge_loss_mm);
   }
-  if (opt.mill_model_file.empty()) return;
-  smc::config::MillingModel own;
-  smc::documents::load(opt.mill_model_file, own);
-  use_plant_model(*cfg.mutable_milling_model(), std::move(own));
+  if (!opt.mill_model_file.empty()) {
+    smc::config::MillingModel own;
+    smc::documents::load(opt.mill_model_file, own);
+    use_plant_model(model, std::move(own));
+  }
+  return std::make_unique<SimulatedMill>(model, sim, sample_period_s);
 }
 
 // Runs on the intake thread: reads only `opt` (fixed) and its argument.
@@ -101,8 +106,7 @@ std::string EdgeService::Impl::check(smc::config::SupervisorConfig& cfg) {
       (void)supervision::render_gcode(p, supervision::cut_geometry(cfg));
       return {};
     }
-    use_mill_model(cfg);
-    SimulatedMill probe(cfg.milling_model(), cfg.simulation(), ec.params.sample_period_s);
+    (void)simulated_mill(cfg, ec.params.sample_period_s);
   } catch (const std::exception& e) {
     return e.what();
   }

@@ -42,7 +42,7 @@ void EdgeService::Impl::take_jobs() {
 void EdgeService::Impl::start_job(const smc::config::JobAssignment& a) {
   auto j = std::make_unique<RunningJob>();
   j->assignment = a;
-  j->config = *config;  // already carries the mill's model (check())
+  j->config = *config;  // the cell's models: the simulated mill's own is its alone
   EdgeConfig ec = edge_config_from_proto(j->config);
   const std::string tag = a.job_id() + "#" + std::to_string(a.attempt());
   try {
@@ -54,8 +54,7 @@ void EdgeService::Impl::start_job(const smc::config::JobAssignment& a) {
       j->cnc = d.get();
       j->mill = std::move(d);
     } else {
-      j->mill = std::make_unique<SimulatedMill>(j->config.milling_model(), j->config.simulation(),
-                                                ec.params.sample_period_s);
+      j->mill = simulated_mill(j->config, ec.params.sample_period_s);
     }
     j->core = std::make_unique<EdgeCore>(ec, *j->mill);
     j->core->set_batch_decimation(opt.batch_decimation);

@@ -45,7 +45,8 @@ void add_run(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, 64));
   sub->add_option("--mill-model", opt->mill_model_file,
-                  "The simulated mill's own milling model (default: the configuration's)")
+                  "The simulated mill's own milling model (default: the configuration's); the\n"
+                  "edge's modules keep the configuration's models")
       ->check(CLI::ExistingFile);
   sub->add_flag("--no-realtime", *no_rt, "Do not ask for SCHED_FIFO and mlockall");
   sub->add_option("--drive", opt->drive,

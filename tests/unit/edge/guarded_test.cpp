@@ -37,14 +37,17 @@ struct Run {
 std::unique_ptr<Run> run_on(const std::string& config, bool mismatched) {
   auto r = std::make_unique<Run>();
   r->raw = test::shipped_config(config);
+  // The edge knows the configuration's models; the mismatched mill's are
+  // the simulated mill's alone.
+  EdgeConfig cfg = edge_config_from_proto(r->raw);
+  smc::config::MillingModel mill = r->raw.milling_model();
   if (mismatched) {
     smc::config::MillingModel plant;
     smc::documents::load(test::source_path("cell/models/paper_face_mill_mismatched.textproto"),
                          plant);
-    use_plant_model(*r->raw.mutable_milling_model(), plant);
+    use_plant_model(mill, plant);
   }
-  EdgeConfig cfg = edge_config_from_proto(r->raw);
-  r->mill.emplace(r->raw.milling_model(), r->raw.simulation(), cfg.params.sample_period_s);
+  r->mill.emplace(mill, r->raw.simulation(), cfg.params.sample_period_s);
   r->core.emplace(cfg, *r->mill);
   r->core->set_check_declarations(true);  // E, F, G and L each write only what they declare
   r->core->start();
