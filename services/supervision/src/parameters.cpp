@@ -348,7 +348,7 @@ void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noex
     // (chatter_vibration_keep_across_steps stays false):
     // kept, they gained a few late cuts in the study, and on a re-cut after a
     // rewrite (a step in the depth within the pass) compared the revolution
-    // before the step with K's cut in the feed after it and read it as chatter.
+    // before the step with L's cut in the feed after it and read it as chatter.
     p.chatter_vibration_rise = 0.15;
     p.chatter_vibration_pause = 0.155;
     p.chatter_vibration_climb = 0.15;

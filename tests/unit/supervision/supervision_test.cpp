@@ -163,7 +163,7 @@ TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
   EXPECT_EQ(fine.chatter_vibration_flip, defaults.chatter_vibration_flip);
   EXPECT_EQ(fine.chatter_vibration_backup, defaults.chatter_vibration_backup);
   // Forgets its history across a step in the cut at both rates: kept, it
-  // read K's cut in the feed after a re-cut's step as chatter.
+  // read L's cut in the feed after a re-cut's step as chatter.
   EXPECT_FALSE(fine.chatter_vibration_keep_across_steps);
   cfg.mutable_operation()->set_sample_period_s(0.0004);  // 4 a period of 0.4 ms: 10 kHz
   cfg.mutable_operation()->set_wideband_samples_per_tick(4);
