@@ -81,10 +81,10 @@ struct RunningJob {
 class ConfigIntake {
  public:
   struct Verdict {
-    smc::config::SupervisorConfig config;  // as checked (with the mill's own model)
+    smc::config::SupervisorConfig config;  // as the cell sent it
     std::string why;                       // empty: accepted
   };
-  using Check = std::function<std::string(smc::config::SupervisorConfig&)>;
+  using Check = std::function<std::string(const smc::config::SupervisorConfig&)>;
   // `checked` runs on the intake thread after each verdict (to wake the comms thread).
   ConfigIntake(Check check, std::function<void()> checked);
   ~ConfigIntake();
@@ -182,7 +182,7 @@ struct EdgeService::Impl {
   std::unique_ptr<SimulatedMill> simulated_mill(const smc::config::SupervisorConfig& cfg,
                                                 double sample_period_s) const;
   // Full check: everything the job would build, built now.
-  std::string check(smc::config::SupervisorConfig& cfg);
+  std::string check(const smc::config::SupervisorConfig& cfg);
   void take_configs();
   // ---- jobs.cpp
   void take_jobs();

@@ -92,7 +92,7 @@ std::unique_ptr<SimulatedMill> EdgeService::Impl::simulated_mill(
 }
 
 // Runs on the intake thread: reads only `opt` (fixed) and its argument.
-std::string EdgeService::Impl::check(smc::config::SupervisorConfig& cfg) {
+std::string EdgeService::Impl::check(const smc::config::SupervisorConfig& cfg) {
   if (cfg.machine().machine_id() != opt.machine_id) {
     return "supervisor_config.machine.machine_id: '" + cfg.machine().machine_id() +
            "' is not this edge ('" + opt.machine_id + "')";

@@ -30,7 +30,7 @@ EdgeService::Impl::Impl(ServiceOptions o)
       program_writer(participant),
       dispatcher(participant),
       intake(std::make_unique<ConfigIntake>(
-          [this](smc::config::SupervisorConfig& cfg) { return check(cfg); },
+          [this](const smc::config::SupervisorConfig& cfg) { return check(cfg); },
           [this] { dispatcher.wake(); })) {
   load_journal();
   using P = tr::Dispatcher::Priority;

@@ -47,7 +47,7 @@ smc::config::SupervisorConfig named(const std::string& id) {
 TEST(ConfigIntake, SubmittingNeverWaitsForACheckAndTheNewestWins) {
   Gate gate;
   ConfigIntake intake(
-      [&](smc::config::SupervisorConfig& c) {
+      [&](const smc::config::SupervisorConfig& c) {
         {
           std::lock_guard lock(gate.mu);
           gate.checked.push_back(c.config_id());
