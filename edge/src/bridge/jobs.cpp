@@ -185,6 +185,9 @@ void EdgeService::Impl::finish_job() {
   stop_loop();
   drain();                                     // whatever the loop produced last
   job->done = job->done || job->core->done();  // the loop has stopped: safe to look
+  // The machine time the job ended at is the core's last sample, not the
+  // last revolution telemetry carried (up to a revolution before it).
+  job->latest.t_s = std::max(job->latest.t_s, job->core->drive_sample().force.t_s);
   job->peak_force_n = std::max(job->peak_force_n, job->core->peak_force_n());
   if (pending_chatter) {
     chatter_writer.write(*pending_chatter);
