@@ -317,6 +317,32 @@ TEST_F(Cell, ABrokenToothFailsTheJobAndRetiresTheTool) {
 // mill-2's models and goes only to mill-2, though mill-1 is idle; a job
 // pinned to mill-1 runs there under SMC II, the explanation naming the
 // suspect models.
+// SMC II+ to its end: the chatter moves the spindle and adds no pass. The
+// result counts the speed change and no rewrite, as the edge counted them
+// (the cell cannot infer a speed change from the passes), and `job show`
+// says so.
+TEST_F(Cell, ASpeedChangeIsCountedInTheJobsResultAndAddsNoPass) {
+  start_cell();
+  start_edge("mill-1");
+  const std::string id = submit("cell/jobs/job_shop_plus.textproto");
+  ASSERT_FALSE(id.empty());
+  ASSERT_TRUE(wait_jobs(
+      {id}, [](const store::Job& j) { return store::is_terminal(j.state); }, 120s));
+  const auto j = *job(id);
+  ASSERT_EQ(j.state, cfg::JOB_DONE) << j.explanation;
+  EXPECT_EQ(j.variant, cfg::SMC_II_PLUS) << j.explanation;
+  ASSERT_TRUE(j.result.has_value());
+  EXPECT_EQ(j.result->chatter_events(), 1u);
+  EXPECT_EQ(j.result->spindle_speed_changes(), 1u);
+  EXPECT_EQ(j.result->program_rewrites(), 0u);
+  EXPECT_EQ(j.result->passes_completed(), j.result->passes_planned());
+  const std::string shown =
+      output_of({bin("smc-cell"), "--log-level", "off", "job", "show", id, "--db", db_});
+  EXPECT_NE(shown.find("0 rewrites, 1 spindle speed change, 1 chatter event,"), std::string::npos)
+      << shown;
+  EXPECT_NE(shown.find("vs reference"), std::string::npos) << shown;
+}
+
 TEST_F(Cell, ChatterUnderSmcIMarksItsModelsSuspectAndThePartMovesToAMachineWhoseModelsHold) {
   start_cell();
   start_edge("mill-1", "cell/models/paper_face_mill_mismatched.textproto");

@@ -592,14 +592,12 @@ struct CellService::Impl {
             r.set_variant(cur->variant);
             r.set_completed(true);
             r.set_passes_completed(p.pass_count);
-            // Each rewrite by the chatter suppressor adds one pass to the
-            // program (smc::supervision::add_one_pass); a speed change adds
-            // none. The edge's programs are not all seen here (keep-last 1).
-            if (cur->plan) {
-              const auto planned = static_cast<uint32_t>(cur->plan->program().passes_size());
-              r.set_passes_planned(planned);
-              r.set_program_rewrites(p.pass_count > planned ? p.pass_count - planned : 0);
-            }
+            if (cur->plan)
+              r.set_passes_planned(static_cast<uint32_t>(cur->plan->program().passes_size()));
+            // Counted by the edge from its events: the programs it publishes
+            // are not all seen here (keep-last 1).
+            r.set_program_rewrites(p.program_rewrites);
+            r.set_spindle_speed_changes(p.spindle_speed_changes);
             r.set_depth_removed_mm(p.depth_removed_mm);
             r.set_chatter_events(pr.chatter);
             r.set_peak_force_n(p.peak_force_n);

@@ -67,11 +67,23 @@ void print_job(const store::Job& j, const std::vector<store::JobEvent>& events) 
   }
   if (j.result) {
     const auto& r = *j.result;
+    // The cell records the peak F_Y against the highest reference the edge
+    // held (overshoot_pct); the per-revolution violation is the edge's own.
+    const std::string speed = r.spindle_speed_changes() > 0
+                                  ? ", " + std::to_string(r.spindle_speed_changes()) +
+                                        " spindle speed change" +
+                                        (r.spindle_speed_changes() == 1 ? "" : "s")
+                                  : std::string();
+    char force[96] = "";
+    if (r.force_reference_n() > 0) {
+      std::snprintf(force, sizeof force, ", peak force %+.0f %% vs reference %.0f N",
+                    r.overshoot_pct(), r.force_reference_n());
+    }
     std::printf(
-        "  result    %s, %u/%u passes, %u rewrites, %u chatter events, peak force %+.0f %% "
-        "vs reference, cycle %.1f s\n",
+        "  result    %s, %u/%u passes, %u rewrite%s%s, %u chatter event%s%s, cycle %.1f s\n",
         r.completed() ? "completed" : "not completed", r.passes_completed(), r.passes_planned(),
-        r.program_rewrites(), r.chatter_events(), r.peak_force_violation_pct(), r.cycle_time_s());
+        r.program_rewrites(), r.program_rewrites() == 1 ? "" : "s", speed.c_str(),
+        r.chatter_events(), r.chatter_events() == 1 ? "" : "s", force, r.cycle_time_s());
   }
   std::printf("  events\n");
   for (const auto& e : events) {

@@ -71,6 +71,8 @@ struct RunningJob {
   bool done = false;
   uint32_t sequence = 0;
   uint32_t chatter_events = 0;
+  uint16_t program_rewrites = 0;
+  uint16_t spindle_speed_changes = 0;
   double peak_force_n = 0;
   std::chrono::steady_clock::time_point last_progress{};
 };

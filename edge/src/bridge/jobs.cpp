@@ -155,6 +155,8 @@ void EdgeService::Impl::publish_progress(smc_data_JobPhase phase, const std::str
   p.fraction_done =
       static_cast<float>(total > 0 ? static_cast<double>(p.depth_removed_mm) / total : 0.0);
   p.chatter_events = job->chatter_events;
+  p.program_rewrites = job->program_rewrites;
+  p.spindle_speed_changes = job->spindle_speed_changes;
   p.peak_force_n = static_cast<float>(job->peak_force_n);
   set_string(p.message, why);
   progress_writer.write(p);

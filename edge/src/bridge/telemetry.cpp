@@ -133,6 +133,7 @@ void EdgeService::Impl::on_event(const EdgeEvent& e) {
     case EventKind::kProgramRewritten:
     case EventKind::kSpeedChanged: {
       const bool speed = e.kind == EventKind::kSpeedChanged;
+      ++(speed ? job->spindle_speed_changes : job->program_rewrites);
       publish_program(e);
       if (pending_chatter) {
         pending_chatter->new_pass_count = static_cast<uint16_t>(job->program.count);

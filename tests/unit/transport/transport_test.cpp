@@ -167,6 +167,8 @@ void fill(smc_data_JobProgress& s) {
   s.chatter_events = 1;
   s.peak_force_n = 680.f;
   set_string(s.message, "pass 2 of 2");
+  s.program_rewrites = 1;
+  s.spindle_speed_changes = 3;
 }
 void expect_same(const smc_data_JobProgress& a, const smc_data_JobProgress& b) {
   EXPECT_EQ(get_string(a.machine_id), get_string(b.machine_id));
@@ -181,6 +183,8 @@ void expect_same(const smc_data_JobProgress& a, const smc_data_JobProgress& b) {
   EXPECT_EQ(a.chatter_events, b.chatter_events);
   EXPECT_EQ(a.peak_force_n, b.peak_force_n);
   EXPECT_EQ(get_string(a.message), get_string(b.message));
+  EXPECT_EQ(a.program_rewrites, b.program_rewrites);
+  EXPECT_EQ(a.spindle_speed_changes, b.spindle_speed_changes);
 }
 
 void fill(smc_data_OperatorCommand& s) {
