@@ -320,7 +320,7 @@ TEST_F(Cell, ABrokenToothFailsTheJobAndRetiresTheTool) {
 // SMC II+ to its end: the chatter moves the spindle and adds no pass. The
 // result counts the speed change and no rewrite, as the edge counted them
 // (the cell cannot infer a speed change from the passes), and `job show`
-// says so.
+// says so, with the configuration the attempt ran.
 TEST_F(Cell, ASpeedChangeIsCountedInTheJobsResultAndAddsNoPass) {
   start_cell();
   start_edge("mill-1");
@@ -341,6 +341,9 @@ TEST_F(Cell, ASpeedChangeIsCountedInTheJobsResultAndAddsNoPass) {
   EXPECT_NE(shown.find("0 rewrites, 1 spindle speed change, 1 chatter event,"), std::string::npos)
       << shown;
   EXPECT_NE(shown.find("vs reference"), std::string::npos) << shown;
+  EXPECT_NE(shown.find("configuration '" + id + "-a1', "), std::string::npos)
+      << "the attempt's configuration\n"
+      << shown;
 }
 
 TEST_F(Cell, ChatterUnderSmcIMarksItsModelsSuspectAndThePartMovesToAMachineWhoseModelsHold) {

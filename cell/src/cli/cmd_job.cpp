@@ -57,9 +57,14 @@ void print_job(const store::Job& j, const std::vector<store::JobEvent>& events) 
     }
     const auto& gcode = prog.gcode();
     const auto gcode_lines = std::count(gcode.begin(), gcode.end(), '\n');
-    std::printf("            configuration '%s', %d passes%s%s; for %s\n",
-                j.plan->config_id().c_str(), prog.passes_size(), passes.empty() ? "" : ": ",
-                passes.c_str(), j.planned_for.empty() ? "any machine" : j.planned_for.c_str());
+    // The plan has no id of its own: each attempt runs it as
+    // configuration <job>-a<attempt>, made at dispatch.
+    const std::string conf =
+        j.attempt > 0 ? "configuration '" + smc::cell::Planner::config_id(j, j.attempt) + "'"
+                      : std::string("not dispatched yet");
+    std::printf("            %s, %d passes%s%s; for %s\n", conf.c_str(), prog.passes_size(),
+                passes.empty() ? "" : ": ", passes.c_str(),
+                j.planned_for.empty() ? "any machine" : j.planned_for.c_str());
     if (gcode_lines > 0) {
       std::printf("            G-code: %ld lines (smc-cell job show %s --gcode)\n",
                   static_cast<long>(gcode_lines), j.id.c_str());
