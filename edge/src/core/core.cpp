@@ -148,6 +148,7 @@ void EdgeCore::start() {
   last_in_pass_ = false;
   last_done_ = false;
   speed_change_pass_ = -1;
+  ledge_count_ = 0;
   applied_speed_rpm_ = 0;
   ident_pass_ = -1;
   ident_revolutions_ = 0;
@@ -268,6 +269,24 @@ bool EdgeCore::advance_revolution_clock() noexcept {
   return true;
 }
 
+bool EdgeCore::crossing_ledge() const noexcept {
+  const int pass = drive_sample_.pass_index;
+  if (!drive_sample_.in_pass || pass < 0 || pass >= running_.program.count) return false;
+  const double top = running_.program.depth_before(pass);
+  // From where the cutter's leading edge first reaches material beyond the
+  // ledge (a diameter before where the aborted pass stopped) to a radius
+  // past it. Without the cutter's radius, the whole pass.
+  const double r = config_.params.cutter_radius_mm;
+  for (int i = 0; i < ledge_count_; ++i) {
+    const Ledge& l = ledges_[static_cast<size_t>(i)];
+    if (!(top < l.depth_mm - 1e-9)) continue;  // cut below it already
+    if (!(r > 0)) return true;
+    const double x = drive_sample_.x_mm;
+    if (x >= l.x_mm - 2 * r && x <= l.x_mm + r) return true;
+  }
+  return false;
+}
+
 void EdgeCore::tick(bool overrun) noexcept {
   ++ticks_;
   const EdgeParameters& p = config_.params;
@@ -287,6 +306,7 @@ void EdgeCore::tick(bool overrun) noexcept {
   s_.in_pass = drive_sample_.in_pass;
   s_.spindle_power_w = drive_sample_.spindle_power_w;
   s_.engagement = drive_sample_.engagement;
+  s_.crossing_ledge = crossing_ledge();
   s_.speed_changed_in_pass =
       speed_change_pass_ >= 0 && speed_change_pass_ == drive_sample_.pass_index;
   const int pass = drive_sample_.pass_index;
@@ -375,6 +395,13 @@ void EdgeCore::tick(bool overrun) noexcept {
       events_.try_push(e);
     }
     if (s_.program_rewritten) {
+      // The aborted pass stops here, cut to its depth behind the cutter
+      // (the passes before it are as they were).
+      if (ledge_count_ < static_cast<int>(ledges_.size()) && drive_sample_.in_pass) {
+        ledges_[static_cast<size_t>(ledge_count_++)] = {
+            drive_sample_.x_mm,
+            running_.program.depth_before(running_.current_pass) + drive_sample_.depth_mm};
+      }
       if (drive_.rewrite(running_.program, running_.current_pass) != Status::kOk) {
         raise_fault(Fault::kDriveError, -1, 0);
       }

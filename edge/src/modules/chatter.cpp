@@ -463,14 +463,17 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       s2_ = s1_;
       s1_ = sq;
     } else if (!(stepped && !leaving && std::isfinite(q) &&
-                 p_.chatter_vibration_keep_across_steps)) {
+                 p_.chatter_vibration_keep_across_steps && !s.crossing_ledge)) {
       q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
       q_above_ = flip_above_ = 0;
     }
     // (Across a step, with keep_across_steps, the revolution is not judged
     // and the rules' history is kept: chatter's own growth raises the mean
     // F_z so, and forgetting the revolutions before it made E a revolution
-    // or two late on fast-growing chatter.)
+    // or two late on fast-growing chatter. Not where the cutter crosses an
+    // aborted pass's ledge: that step is the cut's, and the controller's
+    // answer to it changes the vibration from one revolution to the next
+    // as chatter would.)
   }
 
   if (!steady || leaving) {

@@ -344,16 +344,17 @@ void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noex
     // 1-3 % of the mill's there, so the rules can sit at the label's own
     // threshold (0.15) and take any growth; a period doubling must hold three
     // revolutions, as stable cuts' halfway orders reach the flip level for two.
-    // The rules forget their history across a step in the cut, as at 2 kHz
-    // (chatter_vibration_keep_across_steps stays false):
-    // kept, they gained a few late cuts in the study, and on a re-cut after a
-    // rewrite (a step in the depth within the pass) compared the revolution
-    // before the step with L's cut in the feed after it and read it as chatter.
+    // The rules keep their history across a step in the mean F_z (chatter's
+    // own growth steps it), save where the cutter crosses the ledge an
+    // aborted pass left: there the step is the cut's, and kept they compared
+    // the revolution before it with L's cut in the feed after it and read
+    // it as chatter (edge/CHATTER.md, "Shipped at 10 kHz").
     p.chatter_vibration_rise = 0.15;
     p.chatter_vibration_pause = 0.155;
     p.chatter_vibration_climb = 0.15;
     p.chatter_vibration_growth = 1.0;
     p.chatter_vibration_flip_revolutions = 3;
+    p.chatter_vibration_keep_across_steps = true;
   }
 }
 

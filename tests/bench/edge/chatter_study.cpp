@@ -10,7 +10,7 @@
 //       [--vibration-jump-dip X] [--vibration-steep X] [--vibration-steep-growth X]
 //       [--vibration-steep-from X] [--vibration-confirmed X]
 //       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-flip X]
-//       [--vibration-backup X] [--vibration-flip-revolutions N] [--vibration-keep-across-steps]
+//       [--vibration-backup X] [--vibration-flip-revolutions N] [--vibration-forget-across-steps]
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
 //       [--wide-samples N] [--sample-period S] [--mill-model FILE] [--no-regeneration]
 //       [--twin-label] [--tick-label]
@@ -391,15 +391,16 @@ int main(int argc, char** argv) {
     app.add_option(k.flag, k.value, help)->check(smc::bench::kNonNegative);
   }
   int flip_revolutions = 0;  // 0: shipped
-  bool keep_across_steps = false;
+  bool forget_across_steps = false;
   app.add_option("--vibration-flip-revolutions", flip_revolutions,
                  "the period-doubling rule's revolutions in a row (shipped: " +
                      std::to_string(shipped.chatter_vibration_flip_revolutions) + " at 10 kHz, " +
                      std::to_string(at_loop.chatter_vibration_flip_revolutions) + " at 2 kHz)")
       ->check(CLI::Range(1, 10));
-  app.add_flag("--vibration-keep-across-steps", keep_across_steps,
-               "E's rules keep their last revolutions across one not judged for a step in the "
-               "mean F_z (shipped: they forget them)");
+  app.add_flag("--vibration-forget-across-steps", forget_across_steps,
+               "E's rules forget their last revolutions across one not judged for a step in the "
+               "mean F_z (shipped: they keep them at 10 kHz, save across an aborted pass's ledge, "
+               "and forget them at 2 kHz)");
   app.add_option("--dump", dump_path,
                  "CSV of every revolution of the labelling runs (E's q, S, the mill's q), to try "
                  "rules offline");
@@ -493,7 +494,7 @@ int main(int argc, char** argv) {
       if (k.value >= 0) ep.*k.field = k.value;
     }
     if (flip_revolutions > 0) ep.chatter_vibration_flip_revolutions = flip_revolutions;
-    if (keep_across_steps) ep.chatter_vibration_keep_across_steps = true;
+    if (forget_across_steps) ep.chatter_vibration_keep_across_steps = false;
   };
   // E's rules off: the run that labels a cut.
   const bool e_muted = threshold_override >= 1;
@@ -559,7 +560,8 @@ int main(int argc, char** argv) {
         shown.chatter_vibration_level, shown.chatter_vibration_flip,
         shown.chatter_vibration_flip_revolutions, shown.chatter_vibration_backup,
         shown.chatter_vibration_keep_across_steps
-            ? " (q's rules keep their history across a step in the mean F_z)"
+            ? " (q's rules keep their history across a step in the mean F_z, save where the "
+              "cutter crosses an aborted pass's ledge)"
             : "");
   } else {
     std::printf(

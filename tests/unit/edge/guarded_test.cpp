@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -33,6 +34,15 @@ struct Run {
   // From the tick E reports chatter until G's routine completes.
   int suppression_ticks = 0, fed_while_suppressing = 0;
   int controller_ticks_in_routine = 0;  // L active together with G
+  // Where the first rewrite found the cutter, and the span of the drive's x
+  // over which the core said each pass crossed an aborted pass's ledge.
+  double rewrite_x_mm = std::nan("");
+  int crossing_before_rewrite = 0;
+  struct Span {
+    double lo = INFINITY, hi = -INFINITY;
+    int ticks = 0;
+  };
+  Span crossing[FixedProgram::kMaxPasses];
 };
 
 // `seed`: the simulated sensor's noise (0: the configuration's).
@@ -59,6 +69,18 @@ std::unique_ptr<Run> run_on(const std::string& config, bool mismatched, uint32_t
   Run* pr = r.get();
   opts.on_tick = [pr](const EdgeCore& c) {
     const Signals& s = c.signals();
+    if (s.program_rewritten && std::isnan(pr->rewrite_x_mm))
+      pr->rewrite_x_mm = c.drive_sample().x_mm;
+    if (s.crossing_ledge) {
+      if (std::isnan(pr->rewrite_x_mm)) ++pr->crossing_before_rewrite;
+      const int pass = c.drive_sample().pass_index;
+      if (pass >= 0 && pass < FixedProgram::kMaxPasses) {
+        Run::Span& sp = pr->crossing[pass];
+        sp.lo = std::min(sp.lo, c.drive_sample().x_mm);
+        sp.hi = std::max(sp.hi, c.drive_sample().x_mm);
+        ++sp.ticks;
+      }
+    }
     if ((s.active & bit(ModuleId::G)) == 0) return;
     if ((s.active & bit(ModuleId::L)) != 0) ++pr->controller_ticks_in_routine;
     if (s.suppression_done) return;
@@ -181,11 +203,13 @@ TEST(GuardedSmcOne, CatchesChatterOnAMismatchedMillAddsAPassAndFinishesStable) {
 
 // After the rewrite the re-cut meets the step the aborted pass left: F_y
 // rises by two thirds in a revolution or two and L cuts the feed. The
-// vibration's pattern changes there as chatter's would, and E does not
-// judge the step's revolution and forgets the revolutions before it. Kept,
-// they made E fire again at the step with some noise seeds (edge/CHATTER.md,
-// "Judging through a step in the cut"): one chatter event and three passes
-// whatever the sensor's noise.
+// vibration's pattern changes there as chatter's would. E does not judge
+// the step's revolutions, and there, where the core says the cutter crosses
+// the aborted pass's ledge, it forgets the revolutions before them (it
+// keeps them across other steps). Kept there too, they made E fire again at
+// the step with every seed here, three chatter events and five passes
+// (edge/CHATTER.md, "Shipped at 10 kHz"): one chatter event and three
+// passes whatever the sensor's noise.
 TEST(GuardedSmcOne, TheReCutsStepIsNoChatterWhateverTheSensorsNoise) {
   for (uint32_t seed = 1; seed <= 8; ++seed) {
     auto r = run_on("smc1_guarded.textproto", true, seed);
@@ -211,4 +235,29 @@ TEST(GuardedSmcOne, OnTheModelledMillRunsAsThePapersSmcOne) {
   EXPECT_EQ(s.passes_completed(), 2u);
   EXPECT_NEAR(s.cycle_time_s(), paper->summary.cycle_time_s(), 0.1);
   EXPECT_LE(s.steady_mean_power_w(), 745.7);
+}
+
+// The ledge the aborted first pass left (cut to 1 mm up to where it
+// stopped, 0.667 mm beyond after the rewrite): the core marks the span
+// from a cutter's diameter before where it stopped to a radius past it, in
+// the passes that start above it (the first, cut again from its start at
+// its new depth, and the second), and nowhere else.
+TEST(GuardedSmcOne, TheCoreMarksWhereTheReCutsCrossTheAbortedPasssLedge) {
+  auto r = run_on("smc1_guarded.textproto", true);
+  ASSERT_TRUE(r->summary.completed());
+  ASSERT_EQ(r->summary.program_rewrites(), 1u);
+  const double x = r->rewrite_x_mm;
+  const double radius = r->raw.operation().cutter_radius_mm();
+  ASSERT_TRUE(std::isfinite(x));
+  ASSERT_GT(radius, 0);
+  EXPECT_EQ(r->crossing_before_rewrite, 0);
+  const Run::Span& first = r->crossing[0];
+  const Run::Span& second = r->crossing[1];
+  for (const Run::Span* sp : {&first, &second}) {
+    ASSERT_GT(sp->ticks, 0);
+    EXPECT_GE(sp->lo, x - 2 * radius - 1e-9);
+    EXPECT_LE(sp->hi, x + radius + 1e-9);
+    EXPECT_GT(sp->hi, x + radius - 1.0) << "the whole span was crossed";
+  }
+  EXPECT_EQ(r->crossing[2].ticks, 0) << "the third pass starts below the ledge";
 }

@@ -1914,12 +1914,13 @@ TEST(AutomaticChatterDetector, APeriodDoublingIsChatterThoughEveryRevolutionRepe
 // judged; with keep_across_steps they compare across it, and E fires on
 // the first judged revolution after the step (edge/CHATTER.md, "Judging
 // through a step in the cut"). A step in a cut that repeats itself is no
-// chatter either way.
+// chatter either way. Where the core says the cutter crosses an aborted
+// pass's ledge, a step is the cut's and the rules forget even so.
 TEST(AutomaticChatterDetector, KeepingItsHistoryAcrossAStepCatchesGrowthSooner) {
   // The revolution E first detects chatter on (-1: none); F_z's mean steps
   // from 300 N to 345 N on revolution `step` and stays there.
   auto run = [](const EdgeParameters& p, std::initializer_list<double> chatter, int step,
-                std::vector<double>* q) {
+                std::vector<double>* q, bool ledge = false) {
     AutomaticChatterDetector e;
     e.configure(p);
     int k0 = 0, r = -6;
@@ -1927,6 +1928,7 @@ TEST(AutomaticChatterDetector, KeepingItsHistoryAcrossAStepCatchesGrowthSooner) 
       Signals s;
       s.spindle_rpm = 1500;
       s.engagement = 1;
+      s.crossing_ledge = ledge;
       s.revolution_samples = p.samples_per_revolution;
       const double mean = r >= step ? 345 : 300;
       for (int k = 0; k < p.samples_per_revolution; ++k, ++k0) {
@@ -1963,6 +1965,8 @@ TEST(AutomaticChatterDetector, KeepingItsHistoryAcrossAStepCatchesGrowthSooner) 
   EXPECT_GT(q_keep[1], keep.chatter_vibration_rise) << "above the rise before the step";
   EXPECT_EQ(kept, 3) << "the first judged revolution after the step";
   EXPECT_TRUE(forgot < 0 || forgot > kept) << forgot;
+  std::vector<double> q_ledge;
+  EXPECT_EQ(run(keep, growth, 2, &q_ledge, true), forgot) << "at a ledge the rules forget";
   // Without the step both fire where the growth's second rise is.
   std::vector<double> a, b;
   EXPECT_EQ(run(keep, growth, 100, &a), run(forget, growth, 100, &b));

@@ -162,9 +162,9 @@ TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
   EXPECT_EQ(fine.chatter_vibration_jump, defaults.chatter_vibration_jump);
   EXPECT_EQ(fine.chatter_vibration_flip, defaults.chatter_vibration_flip);
   EXPECT_EQ(fine.chatter_vibration_backup, defaults.chatter_vibration_backup);
-  // Forgets its history across a step in the cut at both rates: kept, it
-  // read L's cut in the feed after a re-cut's step as chatter.
-  EXPECT_FALSE(fine.chatter_vibration_keep_across_steps);
+  // Keeps its history across a step in the mean F_z at 10 kHz (but not
+  // across an aborted pass's ledge: the core tells E where that is).
+  EXPECT_TRUE(fine.chatter_vibration_keep_across_steps);
   cfg.mutable_operation()->set_sample_period_s(0.0004);  // 4 a period of 0.4 ms: 10 kHz
   cfg.mutable_operation()->set_wideband_samples_per_tick(4);
   const auto also_fine = sv::parameters_from_config(cfg);
@@ -176,6 +176,7 @@ TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
   EXPECT_FALSE(fine_rules(p));
   EXPECT_EQ(p.chatter_vibration_rise, defaults.chatter_vibration_rise);
   EXPECT_EQ(p.chatter_vibration_growth, defaults.chatter_vibration_growth);
+  EXPECT_FALSE(p.chatter_vibration_keep_across_steps);
 }
 
 TEST(Parameters, TheWidebandNoiseIsTheShippedChannelsAndABadOneIsRefused) {

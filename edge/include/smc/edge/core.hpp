@@ -179,6 +179,16 @@ class EdgeCore {
   // The pass in which module O last ran (-1: none): receptivity h.
   int speed_change_pass_ = -1;
   double applied_speed_rpm_ = 0;  // O's last command passed to the drive
+  // The ledges aborted passes left: where each stopped (the drive's x) and
+  // the depth it had cut to there. A later pass that starts above one meets
+  // a step in its depth while it crosses it (Signals::crossing_ledge).
+  struct Ledge {
+    double x_mm = 0;
+    double depth_mm = 0;
+  };
+  std::array<Ledge, FixedProgram::kMaxPasses> ledges_{};
+  int ledge_count_ = 0;
+  bool crossing_ledge() const noexcept;
   void emit(EventKind kind) noexcept;
   EdgeEvent make_event(EventKind kind) const noexcept;
 

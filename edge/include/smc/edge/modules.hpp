@@ -95,7 +95,10 @@ class OperatorChatterDetector final : public Module {
 // (vibration_correction), so that q is the structure's own. q is not judged
 // while the cutter leaves the part, across a gap in the channel, or across
 // a step in the cut (the mean F_z rising more than a tenth beyond the
-// engagement's rise). d is then set by the rules of
+// engagement's rise; across such a step the rules keep their history, or
+// forget it where Parameters::chatter_vibration_keep_across_steps is off
+// or the cutter crosses an aborted pass's ledge, Signals::crossing_ledge).
+// d is then set by the rules of
 // Parameters::chatter_vibration_* (q rising past `rise`, or past `climb`
 // for longer, or past `pause` with a revolution's pause, or above `net`
 // three times while growing by half, or jumping past `jump` and held there

@@ -70,6 +70,10 @@ struct Signals {
   // Share of the cutter's engagement arc in the part (the drive's, from the
   // path and the part's edges); NaN when the drive cannot tell.
   double engagement = __builtin_nan("");
+  // The cutter is crossing the ledge an aborted pass left in this pass's
+  // depth (the core's record of the rewrites, and the drive's position): a
+  // step in the force there is the cut's own.
+  bool crossing_ledge = false;
 
   // --- B operator input monitor
   bool feed_hold_requested = false;     // receptivity a

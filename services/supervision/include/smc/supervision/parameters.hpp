@@ -176,7 +176,9 @@ struct Parameters {
   // beyond the engagement's rise (a step in the cut, or chatter's own
   // growth): false forgets the rules' last revolutions there, true keeps
   // them, so the rules compare across it (edge/CHATTER.md, "Judging through
-  // a step in the cut").
+  // a step in the cut"), save where the cutter crosses the ledge an aborted
+  // pass left (Signals::crossing_ledge: the step is the cut's, and the
+  // controller's answer to it reads as chatter).
   bool chatter_vibration_keep_across_steps = false;
 
   // Derived, in samples.
