@@ -338,7 +338,7 @@ TEST_F(Cell, ASpeedChangeIsCountedInTheJobsResultAndAddsNoPass) {
   EXPECT_EQ(j.result->passes_completed(), j.result->passes_planned());
   const std::string shown =
       output_of({bin("smc-cell"), "--log-level", "off", "job", "show", id, "--db", db_});
-  EXPECT_NE(shown.find("0 rewrites, 1 spindle speed change, 1 chatter event,"), std::string::npos)
+  EXPECT_NE(shown.find("0 rewrites, 1 spindle speed changes, 1 chatter events,"), std::string::npos)
       << shown;
   EXPECT_NE(shown.find("vs reference"), std::string::npos) << shown;
   EXPECT_NE(shown.find("configuration '" + id + "-a1', "), std::string::npos)

@@ -74,21 +74,20 @@ void print_job(const store::Job& j, const std::vector<store::JobEvent>& events) 
     const auto& r = *j.result;
     // The cell records the peak F_Y against the highest reference the edge
     // held (overshoot_pct); the per-revolution violation is the edge's own.
-    const std::string speed = r.spindle_speed_changes() > 0
-                                  ? ", " + std::to_string(r.spindle_speed_changes()) +
-                                        " spindle speed change" +
-                                        (r.spindle_speed_changes() == 1 ? "" : "s")
-                                  : std::string();
+    // The counts keep one form ("1 chatter events"): scripts read this line.
+    char speed[64] = "";
+    if (r.spindle_speed_changes() > 0) {
+      std::snprintf(speed, sizeof speed, ", %u spindle speed changes", r.spindle_speed_changes());
+    }
     char force[96] = "";
     if (r.force_reference_n() > 0) {
       std::snprintf(force, sizeof force, ", peak force %+.0f %% vs reference %.0f N",
                     r.overshoot_pct(), r.force_reference_n());
     }
-    std::printf(
-        "  result    %s, %u/%u passes, %u rewrite%s%s, %u chatter event%s%s, cycle %.1f s\n",
-        r.completed() ? "completed" : "not completed", r.passes_completed(), r.passes_planned(),
-        r.program_rewrites(), r.program_rewrites() == 1 ? "" : "s", speed.c_str(),
-        r.chatter_events(), r.chatter_events() == 1 ? "" : "s", force, r.cycle_time_s());
+    std::printf("  result    %s, %u/%u passes, %u rewrites%s, %u chatter events%s, cycle %.1f s\n",
+                r.completed() ? "completed" : "not completed", r.passes_completed(),
+                r.passes_planned(), r.program_rewrites(), speed, r.chatter_events(), force,
+                r.cycle_time_s());
   }
   std::printf("  events\n");
   for (const auto& e : events) {
