@@ -238,7 +238,7 @@ TEST(GuardedSmcOne, OnTheModelledMillRunsAsThePapersSmcOne) {
 }
 
 // The ledge the aborted first pass left (cut to 1 mm up to where it
-// stopped, 0.667 mm beyond after the rewrite): the core marks the span
+// stopped; the rewrite makes three passes of 0.667 mm): the core marks the span
 // from a cutter's diameter before where it stopped to a radius past it, in
 // the passes that start above it (the first, cut again from its start at
 // its new depth, and the second), and nowhere else.
