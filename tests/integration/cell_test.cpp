@@ -232,6 +232,26 @@ TEST_F(Cell, DemoJobsCompleteWithTheExpectedSmcChoice) {
   EXPECT_EQ(a.result->chatter_events(), 0u);
   EXPECT_EQ(a.attempt, 1u);
   EXPECT_EQ(b.attempt, 1u);
+  // The job-shop plan has no models, and went out with its machine's
+  // structure for module E's vibration estimate: that machine's milling
+  // model's (its part modes the transfer-line part's).
+  const std::string sent = output_of(
+      {bin("smc-cell"), "--log-level", "off", "job", "show", js, "--config", "--db", db_});
+  EXPECT_NE(sent.find("tool_y {"), std::string::npos) << sent;
+  EXPECT_NE(sent.find("part_y {"), std::string::npos) << sent;
+  // (Text format escapes the explanation's apostrophes.)
+  EXPECT_NE(sent.find("Module E estimates the vibration with " + b.machine_id), std::string::npos)
+      << sent;
+  EXPECT_NE(sent.find("structure from model bracket-tl." + b.machine_id + ".milling"),
+            std::string::npos)
+      << sent;
+  // `smc-cell plan` says beforehand which structure each machine gives E.
+  const std::string planned = output_of(
+      {bin("smc-cell"), "--log-level", "off", "plan", src("cell/jobs/job_shop.json"), "--db", db_});
+  EXPECT_NE(planned.find("module E's structure, given at dispatch: mill-1: model "
+                         "bracket-tl.mill-1.milling; mill-2: model bracket-tl.mill-2.milling;"),
+            std::string::npos)
+      << planned;
   // Every plan carries its G-code; the edge's rewrite publishes the G-code
   // of the remaining depth (smc_program, transient-local: the latest).
   EXPECT_NE(a.plan->program().gcode().find("M52 P1"), std::string::npos);

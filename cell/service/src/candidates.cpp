@@ -1,7 +1,9 @@
 #include "smc/cell/candidates.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <tuple>
 
 namespace smc::cell {
 
@@ -55,6 +57,29 @@ PlanInputs bind_job(store::Store& db, const store::Job& job, Selection& selectio
   PlanInputs in{job, *part, *tool, {}, {}};
   selection = bind_and_select(in, machine_candidates(db, job, *part, available));
   return in;
+}
+
+std::optional<store::ProcessModel> structure_model(store::Store& db, const store::Job& job,
+                                                   const std::string& machine_id) {
+  if (machine_id.empty()) return std::nullopt;
+  const auto part = db.part(job.spec.part_id());
+  const std::string material = part ? part->material_id : job.spec.material();
+  std::vector<store::ProcessModel> found;
+  for (auto& m : db.find_models(machine_id, job.spec.tool_id(), "", "")) {
+    if (m.kind != store::ModelKind::kMilling) continue;
+    const auto& st = m.milling.structure();
+    if (st.tool_y_size() + st.part_y_size() == 0) continue;  // nothing for E in y
+    found.push_back(std::move(m));
+  }
+  // find_models' order within each rank (stable).
+  const auto rank = [&](const store::ProcessModel& m) {
+    return std::make_tuple(!m.suspect_reason.empty(), m.part_id != job.spec.part_id(),
+                           m.material_id != material);
+  };
+  std::stable_sort(found.begin(), found.end(),
+                   [&](const auto& a, const auto& b) { return rank(a) < rank(b); });
+  if (found.empty()) return std::nullopt;
+  return std::move(found.front());
 }
 
 }  // namespace smc::cell

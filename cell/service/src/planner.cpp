@@ -557,11 +557,48 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
   return out;
 }
 
+namespace {
+
+// Module E's structure for a plan that has none in y (for_machine).
+void give_e_a_structure(smc::config::SupervisorConfig& c, const store::Machine& machine,
+                        const store::ProcessModel* structure) {
+  const auto& mods = c.modules();
+  if (std::find(mods.begin(), mods.end(), "E") == mods.end()) return;
+  auto* st = c.mutable_milling_model()->mutable_structure();
+  if (st->tool_y_size() + st->part_y_size() > 0) return;  // the plan's own (SMC I)
+  std::ostringstream why;
+  if (structure == nullptr) {
+    why << " Module E has no structure of " << machine.id
+        << " with this tool, so it judges the force spectrum alone (S, edge/CHATTER.md); a "
+           "tap test (`smc-cell model fit-frf`) gives it the vibration estimate.";
+  } else {
+    // The whole structure, the part's modes too where they are another
+    // part's: without them E's estimate misses the part's compliance and
+    // reads q 1.2-1.8 times the mill's (edge/CHATTER.md, "The structure E
+    // is given"), worse than any error in them that was measured.
+    *st = structure->milling.structure();
+    const bool parts_own =
+        structure->part_id.empty() || structure->part_id == c.program().part_id();
+    why << " Module E estimates the vibration with " << machine.id << "'s structure from model "
+        << structure->id << " (" << store::provenance_name(structure->provenance)
+        << (structure->suspect_reason.empty() ? "" : ", suspect") << ")"
+        << (parts_own ? ""
+                      : ", the part's modes being part " + structure->part_id +
+                            "'s: a tap test of this part on its fixture gives its own")
+        << ".";
+  }
+  c.set_explanation(c.explanation() + why.str());
+}
+
+}  // namespace
+
 smc::config::SupervisorConfig Planner::for_machine(const smc::config::SupervisorConfig& plan,
                                                    const store::Machine& machine,
-                                                   const std::string& config_id) {
+                                                   const std::string& config_id,
+                                                   const store::ProcessModel* structure) {
   smc::config::SupervisorConfig c = plan;
   c.set_config_id(config_id);
+  give_e_a_structure(c, machine, structure);
   auto* m = c.mutable_machine();
   m->set_machine_id(machine.id);
   m->set_max_spindle_power_w(machine.max_spindle_power_w);

@@ -363,7 +363,9 @@ struct CellService::Impl {
   }
 
   void send(const store::Job& j, const store::Machine& m, uint32_t attempt) {
-    const cfg::SupervisorConfig c = Planner::for_machine(*j.plan, m, config_id_for(j, attempt));
+    const auto structure = structure_model(db, j, m.id);
+    const cfg::SupervisorConfig c = Planner::for_machine(*j.plan, m, config_id_for(j, attempt),
+                                                         structure ? &*structure : nullptr);
     config_writer.publish(m.id, c.config_id(), c);
     cfg::JobAssignment a;
     a.set_job_id(j.id);
@@ -412,7 +414,9 @@ struct CellService::Impl {
           if (all.empty()) throw std::runtime_error("the database has no machines");
           check_on = all.front();
         }
-        (void)smc::supervision::validate(Planner::for_machine(plan.config, check_on, "check"));
+        const auto structure = structure_model(db, j, check_on.id);
+        (void)smc::supervision::validate(Planner::for_machine(plan.config, check_on, "check",
+                                                              structure ? &*structure : nullptr));
         db.set_plan(j.id, sel.variant, plan.config.explanation(), plan.config, plan.machine_id,
                     plan.model_ids);
         move(*db.job(j.id), cfg::JOB_PLANNED,

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "registry.hpp"
+#include "smc/cell/candidates.hpp"
 #include "smc/cell/planner.hpp"
 #include "smc/cell/store/job_file.hpp"
 #include "smc/cell/store/store.hpp"
@@ -211,11 +212,13 @@ SMC_CELL_COMMAND(job, 20) {
         throw Failure(1, j.id + " has not been sent to a machine yet (" +
                              std::string(store::state_name(j.state)) + " now)");
       }
-      std::fputs(smc::documents::to_textproto(
-                     smc::cell::Planner::for_machine(*j.plan, *m,
-                                                     smc::cell::Planner::config_id(j, j.attempt)))
-                     .c_str(),
-                 stdout);
+      const auto structure = smc::cell::structure_model(s, j, m->id);
+      std::fputs(
+          smc::documents::to_textproto(smc::cell::Planner::for_machine(
+                                           *j.plan, *m, smc::cell::Planner::config_id(j, j.attempt),
+                                           structure ? &*structure : nullptr))
+              .c_str(),
+          stdout);
       return;
     }
     if (show_args->gcode) {

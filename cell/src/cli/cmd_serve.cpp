@@ -1,6 +1,7 @@
 // smc-cell serve / plan: the cell service, and one job's plan offline.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -130,6 +131,20 @@ SMC_CELL_COMMAND(plan, 11) {
     if (!plan.machine_id.empty()) {
       std::printf("\nfeeds (mm/tooth): programmed %.4f, equilibrium %.4f, lower clamp %.4f",
                   plan.programmed_feed_mm, plan.equilibrium_feed_mm, plan.lower_clamp_mm);
+    }
+    // A plan without a structure gets, at dispatch, its machine's for module
+    // E (cell/README.md, "Module E's structure"): say which.
+    const auto& mods = plan.config.modules();
+    const auto& st = plan.config.milling_model().structure();
+    if (std::find(mods.begin(), mods.end(), "E") != mods.end() &&
+        st.tool_y_size() + st.part_y_size() == 0) {
+      std::printf("\nmodule E's structure, given at dispatch:");
+      for (const auto& m : db.machines()) {
+        if (m.retired_at_ms != 0 || (!plan.machine_id.empty() && m.id != plan.machine_id)) continue;
+        const auto model = smc::cell::structure_model(db, job, m.id);
+        std::printf(" %s: %s;", m.id.c_str(),
+                    model ? ("model " + model->id).c_str() : "none (E judges S alone)");
+      }
     }
     std::printf("\nplanned in %.2f s\n", plan.planning_s);
     if (!out->empty()) {

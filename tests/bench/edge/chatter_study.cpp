@@ -13,7 +13,7 @@
 //       [--vibration-backup X] [--vibration-flip-revolutions N] [--vibration-forget-across-steps]
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
 //       [--wide-samples N] [--sample-period S] [--mill-model FILE] [--no-regeneration]
-//       [--twin-label] [--tick-label]
+//       [--twin-label] [--tick-label] [--edge-knows-the-mill] [--edge-tool-modes-only]
 //
 // --help lists every flag with what it does and its default.
 //
@@ -66,7 +66,10 @@
 // --mill-model FILE: the
 // simulated mill cuts with that model's structure and cutting law (e.g.
 // cell/models/paper_face_mill_mismatched.textproto), while E and the
-// critical depths keep the configuration's. --no-regeneration: the mill
+// critical depths keep the configuration's; with --edge-knows-the-mill E
+// undoes that model's structure instead (a tap test on the machine itself).
+// --edge-tool-modes-only: E undoes the configuration's tool modes alone, not
+// the part's (edge/CHATTER.md, "The structure E is given"). --no-regeneration: the mill
 // cuts every chip at its nominal thickness (simulation.no_regeneration), so
 // no cut can chatter and the vibration is the forced response alone: every
 // onset the label finds then is one it should not, and every detection a
@@ -273,6 +276,8 @@ int main(int argc, char** argv) {
   bool no_regeneration = false;
   bool twin_label = false;
   bool tick_label = false;
+  bool edge_knows_the_mill = false;
+  bool edge_tool_modes_only = false;
   double channel_noise = -1;  // < 0: the configuration's
   double wide_cutoff = -1;    // < 0: the configuration's
   double sample_period = -1;  // < 0: the configuration's
@@ -347,6 +352,13 @@ int main(int argc, char** argv) {
   app.add_flag("--tick-label", tick_label,
                "with the wideband channel faster than the loop (as shipped): the label reads the "
                "mill's vibration at the sample period, not at the channel's rate");
+  app.add_flag("--edge-knows-the-mill", edge_knows_the_mill,
+               "with --mill-model: E undoes the mill's own structure, not the configuration's "
+               "(as after a tap test on that machine); the critical depths still keep the "
+               "configuration's model");
+  app.add_flag("--edge-tool-modes-only", edge_tool_modes_only,
+               "E undoes the tool's modes alone, as where the cell knows the machine's tool and "
+               "not the part's own modes");
   app.add_option("--threshold", threshold_override,
                  "S's threshold (alone; 1 or more switches E's rules off in both runs, and each "
                  "cut runs once)")
@@ -462,6 +474,12 @@ int main(int argc, char** argv) {
   smc::config::MillingModel plant;
   if (!grid.load_mill_model(plant)) return 2;
   const std::string& mill_model_file = grid.mill_model_file;
+  if (edge_knows_the_mill && mill_model_file.empty()) {
+    std::fprintf(stderr,
+                 "--edge-knows-the-mill needs --mill-model FILE: without one the mill is the "
+                 "configuration's model, whose structure E already undoes\n");
+    return 2;
+  }
   if (confirm_override > 0) {
     base.mutable_operation()->set_chatter_confirm_revolutions(
         static_cast<uint32_t>(confirm_override));
@@ -572,12 +590,15 @@ int main(int argc, char** argv) {
   std::printf(
       "; band %.0f-%.0f Hz, guard +-%.0f Hz, noise %.1f N rms, a sample every %.2f ms (the "
       "wideband channel's every %.3f ms); "
-      "programmed %.2f mm/tooth, %d seeds; the mill: %s%s; labelled on %s, read every "
+      "programmed %.2f mm/tooth, %d seeds; the mill: %s%s%s; labelled on %s, read every "
       "%.3f ms\n\n",
       base.operation().chatter_band_low_hz(), base.operation().chatter_band_high_hz(),
       base.operation().harmonic_guard_hz(), base.simulation().noise_rms_n(),
       1000 * shown.sample_period_s, 1000 * shown.sample_period_s / shown.vibration_samples_per_tick,
       fpt, seeds, mill_model_file.empty() ? "the configuration's model" : mill_model_file.c_str(),
+      edge_knows_the_mill    ? ", whose structure E undoes"
+      : edge_tool_modes_only ? " (E undoes the tool's modes alone)"
+                             : "",
       no_regeneration ? ", without regeneration (no cut can chatter: every onset the label "
                         "finds is the forced response's)"
                       : "",
@@ -656,6 +677,13 @@ int main(int argc, char** argv) {
             // with this cutter (runout) and part (width).
             auto mill_msg = raw.milling_model();
             if (!mill_model_file.empty()) use_plant_model(mill_msg, plant);
+            if (edge_knows_the_mill) {
+              *raw.mutable_milling_model()->mutable_structure() = mill_msg.structure();
+            }
+            if (edge_tool_modes_only) {
+              raw.mutable_milling_model()->mutable_structure()->clear_part_x();
+              raw.mutable_milling_model()->mutable_structure()->clear_part_y();
+            }
             // The cut twice: with E's rules off, which labels it (the onset
             // from the vibration, nothing reacting to it), then with E
             // listening, whose first detection is what it decides before

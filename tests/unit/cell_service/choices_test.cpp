@@ -403,6 +403,81 @@ TEST(Selection, AModelOutsideItsValidityRangeIsNotUsed) {
       << sel.explanation;
 }
 
+// Module E estimates the tool's vibration through the machine's structure
+// (edge/CHATTER.md); a job-shop plan has no models, so the cell gives E the
+// structure of the machine it is sent to, from a milling model of that
+// machine with the job's tool (here the transfer-line part's, whose part
+// modes the explanation says are another part's). Without one E judges the
+// force spectrum alone, and the explanation says so and how to give it one.
+TEST_F(CellChoices, AJobShopPlanSentToAMachineGivesModuleEThatMachinesStructure) {
+  const auto in = inputs("housing-js");
+  const auto sel = cell::select_variant(in);
+  ASSERT_EQ(sel.variant, cfg::SMC_II) << sel.explanation;
+  const auto plan = planner_->plan(in, sel);
+  ASSERT_EQ(plan.config.milling_model().structure().tool_y_size(), 0) << "no models planned";
+
+  const auto structure = cell::structure_model(*db_, in.job, "mill-1");
+  ASSERT_TRUE(structure.has_value());
+  EXPECT_EQ(structure->id, "bracket-tl.mill-1.milling");
+  const auto sent = cell::Planner::for_machine(plan.config, in.machine, "c-1", &*structure);
+  const auto& st = sent.milling_model().structure();
+  ASSERT_EQ(st.tool_y_size(), 1);
+  EXPECT_DOUBLE_EQ(st.tool_y(0).natural_frequency_rad_s(), 4100);
+  ASSERT_EQ(st.part_y_size(), 1) << "without the part's modes E reads q far too high";
+  EXPECT_DOUBLE_EQ(st.part_y(0).natural_frequency_rad_s(), 2100);
+  EXPECT_NE(sent.explanation().find("Module E estimates the vibration with mill-1's structure "
+                                    "from model bracket-tl.mill-1.milling (handbook), the part's "
+                                    "modes being part bracket-tl's"),
+            std::string::npos)
+      << sent.explanation();
+  const auto p = smc::supervision::parameters_from_config(sent);
+  EXPECT_EQ(p.vibration_mode_count, 2) << "E undoes the tool's and the part's y modes";
+
+  // A machine the cell has no structure of: S alone, and said.
+  EXPECT_FALSE(cell::structure_model(*db_, in.job, "mill-none").has_value());
+  const auto bare = cell::Planner::for_machine(plan.config, in.machine, "c-2", nullptr);
+  EXPECT_EQ(bare.milling_model().structure().tool_y_size(), 0);
+  EXPECT_NE(bare.explanation().find("judges the force spectrum alone"), std::string::npos)
+      << bare.explanation();
+  EXPECT_EQ(smc::supervision::parameters_from_config(bare).vibration_mode_count, 0);
+
+  // An SMC I plan keeps its own model's structure, part modes and all.
+  const auto tl = inputs("bracket-tl");
+  const auto tl_sel = cell::select_variant(tl);
+  ASSERT_EQ(tl_sel.variant, cfg::SMC_I) << tl_sel.explanation;
+  const auto tl_plan = planner_->plan(tl, tl_sel);
+  const auto tl_sent = cell::Planner::for_machine(tl_plan.config, tl.machine, "c-3", &*structure);
+  EXPECT_EQ(tl_sent.milling_model().structure().part_y_size(), 1);
+  EXPECT_EQ(tl_sent.explanation().find("Module E estimates"), std::string::npos);
+}
+
+// Which model's structure E gets: one not suspect before a suspect one, the
+// job's own part's before another part's.
+TEST_F(CellChoices, ModuleETakesTheStructureOfTheMachinesBestModelForTheTool) {
+  store::Machine m = *db_->machine("mill-1");
+  m.id = "mill-structure";
+  db_->put_machine(m);
+  const auto in = inputs("housing-js");
+  const auto milling = *cell::structure_model(*db_, in.job, "mill-1");
+  auto put = [&](const std::string& id, const std::string& part, double w) {
+    store::ProcessModel pm = milling;
+    pm.id = id;
+    pm.machine_id = m.id;
+    pm.part_id = part;
+    pm.milling.mutable_structure()->mutable_tool_y(0)->set_natural_frequency_rad_s(w);
+    return db_->add_model(pm);
+  };
+  put("s-other-part", "bracket-tl", 4000);
+  EXPECT_EQ(cell::structure_model(*db_, in.job, m.id)->id, "s-other-part");
+  put("s-own-part", "housing-js", 3900);
+  EXPECT_EQ(cell::structure_model(*db_, in.job, m.id)->id, "s-own-part");
+  db_->mark_model_suspect("s-own-part", "a cut planned from it chattered");
+  EXPECT_EQ(cell::structure_model(*db_, in.job, m.id)->id, "s-other-part");
+  const auto best = cell::structure_model(*db_, in.job, m.id);
+  const auto sent = cell::Planner::for_machine(cfg::SupervisorConfig(), m, "c-4", &*best);
+  EXPECT_EQ(sent.milling_model().structure().tool_y_size(), 0) << "a plan without E gets none";
+}
+
 // ---- planning
 
 // SMC I: each pass's F_ref is planned from the models so that the planned

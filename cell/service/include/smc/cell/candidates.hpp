@@ -4,6 +4,7 @@
 // Shared by the cell service and `smc-cell plan`.
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,5 +26,14 @@ std::vector<MachineModels> machine_candidates(
 // machine_candidates. Throws std::runtime_error for an unknown part or tool.
 PlanInputs bind_job(store::Store& db, const store::Job& job, Selection& selection,
                     const std::function<bool(const std::string&)>& available = {});
+
+// The model whose structure module E undoes on `machine_id` for `job`
+// (the vibration estimate of edge/CHATTER.md: without a structure E judges
+// the force spectrum alone): a milling model of that machine with the job's
+// tool, not retired; one not suspect first, then one for the job's part,
+// then for its material, then find_models' order. None: the cell knows no
+// structure of that machine with that tool.
+std::optional<store::ProcessModel> structure_model(store::Store& db, const store::Job& job,
+                                                   const std::string& machine_id);
 
 }  // namespace smc::cell

@@ -128,9 +128,16 @@ class Planner {
     return job.id + "-a" + std::to_string(attempt);
   }
   // Fills in the machine and gives the configuration its id (at dispatch).
+  // A plan whose supervisor runs module E with no structure in y (SMC II,
+  // SMC II+, SMC I from the part's cuts) gets the tool's modes of
+  // `structure` (structure_model, candidates.hpp: that machine's), and the
+  // part's too where that model is for this part or any part; its
+  // explanation names the model, or says that E judges the force spectrum
+  // alone where `structure` is null.
   static smc::config::SupervisorConfig for_machine(const smc::config::SupervisorConfig& plan,
                                                    const store::Machine& machine,
-                                                   const std::string& config_id);
+                                                   const std::string& config_id,
+                                                   const store::ProcessModel* structure = nullptr);
 
   const PlannerOptions& options() const noexcept { return options_; }
 
