@@ -245,6 +245,19 @@ TEST_F(Cell, DemoJobsCompleteWithTheExpectedSmcChoice) {
   EXPECT_NE(sent.find("structure from model bracket-tl." + b.machine_id + ".milling"),
             std::string::npos)
       << sent;
+  // And the job's history says so at dispatch; the SMC I job's plan brings
+  // its own structure.
+  const std::string js_shown =
+      output_of({bin("smc-cell"), "--log-level", "off", "job", "show", js, "--db", db_});
+  EXPECT_NE(js_shown.find("dispatched to " + b.machine_id +
+                          " (attempt 1); module E with the structure of model bracket-tl." +
+                          b.machine_id + ".milling"),
+            std::string::npos)
+      << js_shown;
+  const std::string tl_shown =
+      output_of({bin("smc-cell"), "--log-level", "off", "job", "show", tl, "--db", db_});
+  EXPECT_NE(tl_shown.find("dispatched to mill-1 (attempt 1)"), std::string::npos) << tl_shown;
+  EXPECT_EQ(tl_shown.find("module E with the structure"), std::string::npos) << tl_shown;
   // `smc-cell plan` says beforehand which structure each machine gives E.
   const std::string planned = output_of(
       {bin("smc-cell"), "--log-level", "off", "plan", src("cell/jobs/job_shop.json"), "--db", db_});

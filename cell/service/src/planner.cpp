@@ -559,13 +559,20 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
 
 namespace {
 
+// Whether a plan runs module E without a structure in y of its own (SMC I
+// brings its model's).
+bool e_needs_a_structure(const smc::config::SupervisorConfig& c) {
+  const auto& mods = c.modules();
+  const auto& st = c.milling_model().structure();
+  return std::find(mods.begin(), mods.end(), "E") != mods.end() &&
+         st.tool_y_size() + st.part_y_size() == 0;
+}
+
 // Module E's structure for a plan that has none in y (for_machine).
 void give_e_a_structure(smc::config::SupervisorConfig& c, const store::Machine& machine,
                         const store::ProcessModel* structure) {
-  const auto& mods = c.modules();
-  if (std::find(mods.begin(), mods.end(), "E") == mods.end()) return;
+  if (!e_needs_a_structure(c)) return;
   auto* st = c.mutable_milling_model()->mutable_structure();
-  if (st->tool_y_size() + st->part_y_size() > 0) return;  // the plan's own (SMC I)
   std::ostringstream why;
   if (structure == nullptr) {
     why << " Module E has no structure of " << machine.id
@@ -591,6 +598,16 @@ void give_e_a_structure(smc::config::SupervisorConfig& c, const store::Machine& 
 }
 
 }  // namespace
+
+std::string Planner::structure_note(const smc::config::SupervisorConfig& plan,
+                                    const store::ProcessModel* structure) {
+  if (!e_needs_a_structure(plan)) return {};
+  return structure != nullptr
+             ? "module E with the structure of model " + structure->id
+             : std::string(
+                   "module E on the force spectrum alone (no structure of this machine "
+                   "with the tool)");
+}
 
 smc::config::SupervisorConfig Planner::for_machine(const smc::config::SupervisorConfig& plan,
                                                    const store::Machine& machine,

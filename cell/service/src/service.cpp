@@ -468,8 +468,13 @@ struct CellService::Impl {
       const auto j = db.job(a.job_id);
       const auto m = db.machine(a.machine_id);
       if (!j || !m) continue;
+      // The structure send() gives module E, said in the job's history.
+      const auto structure = structure_model(db, *j, a.machine_id);
+      const std::string note =
+          j->plan ? Planner::structure_note(*j->plan, structure ? &*structure : nullptr) : "";
       if (!move(*j, cfg::JOB_ASSIGNED,
-                "dispatched to " + a.machine_id + " (attempt " + std::to_string(a.attempt) + ")",
+                "dispatched to " + a.machine_id + " (attempt " + std::to_string(a.attempt) + ")" +
+                    (note.empty() ? "" : "; " + note),
                 a.machine_id))
         continue;
       try {

@@ -440,6 +440,10 @@ TEST_F(CellChoices, AJobShopPlanSentToAMachineGivesModuleEThatMachinesStructure)
   EXPECT_NE(bare.explanation().find("judges the force spectrum alone"), std::string::npos)
       << bare.explanation();
   EXPECT_EQ(smc::supervision::parameters_from_config(bare).vibration_mode_count, 0);
+  EXPECT_EQ(cell::Planner::structure_note(plan.config, &*structure),
+            "module E with the structure of model bracket-tl.mill-1.milling");
+  EXPECT_NE(cell::Planner::structure_note(plan.config, nullptr).find("force spectrum alone"),
+            std::string::npos);
 
   // An SMC I plan keeps its own model's structure, part modes and all.
   const auto tl = inputs("bracket-tl");
@@ -449,6 +453,7 @@ TEST_F(CellChoices, AJobShopPlanSentToAMachineGivesModuleEThatMachinesStructure)
   const auto tl_sent = cell::Planner::for_machine(tl_plan.config, tl.machine, "c-3", &*structure);
   EXPECT_EQ(tl_sent.milling_model().structure().part_y_size(), 1);
   EXPECT_EQ(tl_sent.explanation().find("Module E estimates"), std::string::npos);
+  EXPECT_EQ(cell::Planner::structure_note(tl_plan.config, &*structure), "");
 }
 
 // Which model's structure E gets: one not suspect before a suspect one, the

@@ -138,6 +138,12 @@ class Planner {
                                                    const store::Machine& machine,
                                                    const std::string& config_id,
                                                    const store::ProcessModel* structure = nullptr);
+  // What for_machine gives module E, for the job's history at dispatch:
+  // "module E with the structure of model ID", "module E on the force
+  // spectrum alone (...)", or empty where the plan brings its own structure
+  // or runs no E.
+  static std::string structure_note(const smc::config::SupervisorConfig& plan,
+                                    const store::ProcessModel* structure);
 
   const PlannerOptions& options() const noexcept { return options_; }
 
