@@ -562,10 +562,7 @@ namespace {
 // Whether a plan runs module E without a structure in y of its own (SMC I
 // brings its model's).
 bool e_needs_a_structure(const smc::config::SupervisorConfig& c) {
-  const auto& mods = c.modules();
-  const auto& st = c.milling_model().structure();
-  return std::find(mods.begin(), mods.end(), "E") != mods.end() &&
-         st.tool_y_size() + st.part_y_size() == 0;
+  return smc::supervision::chatter_detector_without_structure(c);
 }
 
 // Module E's structure for a plan that has none in y (for_machine).

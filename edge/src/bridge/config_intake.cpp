@@ -5,6 +5,7 @@
 #include "bridge.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/supervision/gcode.hpp"
+#include "smc/supervision/parameters.hpp"
 #include "smc/wire/limits.hpp"
 
 namespace smc::edge {
@@ -157,6 +158,13 @@ void EdgeService::Impl::apply_checked_configs() {
     if (!v.why.empty()) {
       refuse(cfg.config_id(), v.why);
       continue;
+    }
+    if (smc::supervision::chatter_detector_without_structure(cfg)) {
+      spdlog::warn(
+          "{}: configuration '{}' runs module E with no structure in y "
+          "(milling_model.structure.tool_y, part_y), so E judges the force spectrum alone; "
+          "give it the machine's structure (a tap test) for its vibration estimate",
+          opt.machine_id, cfg.config_id());
     }
     if (job) {
       pending = cfg;

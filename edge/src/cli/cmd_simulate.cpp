@@ -15,6 +15,7 @@
 #include "smc/edge/runner.hpp"
 #include "smc/edge/sim_mill.hpp"
 #include "smc/machining/model.hpp"
+#include "smc/supervision/parameters.hpp"
 #include "smc_config.pb.h"
 
 namespace smc::edge::cli {
@@ -181,6 +182,13 @@ void add_simulate(CLI::App& app) {
   sub->callback([args] {
     smc::config::SupervisorConfig raw;
     EdgeConfig cfg = load_config(args->config, raw);
+    if (smc::supervision::chatter_detector_without_structure(raw)) {
+      std::fprintf(stderr,
+                   "smc-edge: %s: warning: module E runs with no structure in y "
+                   "(milling_model.structure.tool_y, part_y), so it judges the force spectrum "
+                   "alone; give it the machine's structure for its vibration estimate\n",
+                   args->config.c_str());
+    }
     if (args->feed_lag_ms >= 0) {
       raw.mutable_simulation()->set_feed_drive_lag_s(args->feed_lag_ms / 1000.0);
     }

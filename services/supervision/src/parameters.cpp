@@ -326,6 +326,13 @@ double vibration_channel_rate_hz(const Parameters& p) noexcept {
   return p.sample_period_s > 0 ? p.vibration_samples_per_tick / p.sample_period_s : 0;
 }
 
+bool chatter_detector_without_structure(const smc::config::SupervisorConfig& cfg) noexcept {
+  const auto& mods = cfg.modules();
+  const auto& st = cfg.milling_model().structure();
+  return std::find(mods.begin(), mods.end(), "E") != mods.end() &&
+         st.tool_y_size() + st.part_y_size() == 0;
+}
+
 void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noexcept {
   const Parameters loop_rate;  // the defaults: the set chosen at 2 kHz
   // Only the rules that differ between the two sets; the others keep the

@@ -132,6 +132,23 @@ TEST(Parameters, TheWidebandRateDefaultsToTheLoopsAndABadOneIsRefused) {
       << why;
 }
 
+// Module E without a structure in y judges the force spectrum alone; the
+// cell and the edge ask this to give it one or to warn.
+TEST(Parameters, ModuleEWithoutAStructureInYIsTold) {
+  auto cfg = shipped("smc2.textproto");
+  EXPECT_FALSE(sv::chatter_detector_without_structure(cfg));
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_mode_count, 2);
+  auto tool_only = cfg;
+  tool_only.mutable_milling_model()->mutable_structure()->clear_part_y();
+  EXPECT_FALSE(sv::chatter_detector_without_structure(tool_only));
+  cfg.mutable_milling_model()->mutable_structure()->clear_tool_y();
+  cfg.mutable_milling_model()->mutable_structure()->clear_part_y();
+  EXPECT_TRUE(sv::chatter_detector_without_structure(cfg));
+  EXPECT_EQ(sv::parameters_from_config(cfg).vibration_mode_count, 0);
+  EXPECT_FALSE(sv::chatter_detector_without_structure(shipped("smc1.textproto")))
+      << "the paper's SMC I runs no E";
+}
+
 // Module E's rules follow the wideband channel's rate: at the loop's 2 kHz
 // (and up to just under 10 kHz) the set chosen there, the parameters'
 // defaults; from 10 kHz (five samples of 0.5 ms, as shipped, or four of 0.4

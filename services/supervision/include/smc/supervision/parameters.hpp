@@ -211,6 +211,13 @@ double vibration_channel_rate_hz(const Parameters& p) noexcept;
 // `channel_rate_hz` (above). Leaves every other parameter alone.
 void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noexcept;
 
+// Whether `cfg` runs module E (its modules name it) with no structure in y
+// (milling_model.structure's tool_y and part_y): E then judges the force
+// spectrum alone (S), far worse than through its vibration estimate
+// (edge/CHATTER.md, "The structure E is given"). The cell gives such a plan
+// its machine's structure at dispatch; the edge warns of one it accepts.
+bool chatter_detector_without_structure(const smc::config::SupervisorConfig& cfg) noexcept;
+
 // Reads and checks every field the modules use, collecting every problem in
 // `problems` (field paths under "supervisor_config."). The result is only
 // meaningful when no problem was added.
