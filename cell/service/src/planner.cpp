@@ -559,16 +559,11 @@ Plan Planner::plan(const PlanInputs& in, const Selection& sel) const {
 
 namespace {
 
-// Whether a plan runs module E without a structure in y of its own (SMC I
-// brings its model's).
-bool e_needs_a_structure(const smc::config::SupervisorConfig& c) {
-  return smc::supervision::chatter_detector_without_structure(c);
-}
-
 // Module E's structure for a plan that has none in y (for_machine).
 void give_e_a_structure(smc::config::SupervisorConfig& c, const store::Machine& machine,
                         const store::ProcessModel* structure) {
-  if (!e_needs_a_structure(c)) return;
+  // SMC I brings its model's structure; a plan without E needs none.
+  if (!smc::supervision::chatter_detector_without_structure(c)) return;
   auto* st = c.mutable_milling_model()->mutable_structure();
   std::ostringstream why;
   if (structure == nullptr) {
@@ -598,7 +593,7 @@ void give_e_a_structure(smc::config::SupervisorConfig& c, const store::Machine& 
 
 std::string Planner::structure_note(const smc::config::SupervisorConfig& plan,
                                     const store::ProcessModel* structure) {
-  if (!e_needs_a_structure(plan)) return {};
+  if (!smc::supervision::chatter_detector_without_structure(plan)) return {};
   return structure != nullptr
              ? "module E with the structure of model " + structure->id
              : std::string(

@@ -1,7 +1,6 @@
 // smc-cell serve / plan: the cell service, and one job's plan offline.
 
 #include <CLI/CLI.hpp>
-#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -14,6 +13,7 @@
 #include "smc/cell/store/job_file.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/documents/load.hpp"
+#include "smc/supervision/parameters.hpp"
 
 namespace {
 
@@ -134,10 +134,7 @@ SMC_CELL_COMMAND(plan, 11) {
     }
     // A plan without a structure gets, at dispatch, its machine's for module
     // E (cell/README.md, "Module E's structure"): say which.
-    const auto& mods = plan.config.modules();
-    const auto& st = plan.config.milling_model().structure();
-    if (std::find(mods.begin(), mods.end(), "E") != mods.end() &&
-        st.tool_y_size() + st.part_y_size() == 0) {
+    if (smc::supervision::chatter_detector_without_structure(plan.config)) {
       std::printf("\nmodule E's structure, given at dispatch:");
       for (const auto& m : db.machines()) {
         if (m.retired_at_ms != 0 || (!plan.machine_id.empty() && m.id != plan.machine_id)) continue;

@@ -358,7 +358,8 @@ int main(int argc, char** argv) {
                "configuration's model");
   app.add_flag("--edge-tool-modes-only", edge_tool_modes_only,
                "E undoes the tool's modes alone, as where the cell knows the machine's tool and "
-               "not the part's own modes");
+               "not the part's own modes")
+      ->excludes("--edge-knows-the-mill");
   app.add_option("--threshold", threshold_override,
                  "S's threshold (alone; 1 or more switches E's rules off in both runs, and each "
                  "cut runs once)")

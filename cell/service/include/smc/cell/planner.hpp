@@ -129,11 +129,11 @@ class Planner {
   }
   // Fills in the machine and gives the configuration its id (at dispatch).
   // A plan whose supervisor runs module E with no structure in y (SMC II,
-  // SMC II+, SMC I from the part's cuts) gets the tool's modes of
-  // `structure` (structure_model, candidates.hpp: that machine's), and the
-  // part's too where that model is for this part or any part; its
-  // explanation names the model, or says that E judges the force spectrum
-  // alone where `structure` is null.
+  // SMC II+, SMC I from the part's cuts) gets the whole structure of
+  // `structure` (structure_model, candidates.hpp: that machine's), the
+  // part's modes too where that model is another part's; its explanation
+  // names the model and whose part modes they are, or says that E judges
+  // the force spectrum alone where `structure` is null.
   static smc::config::SupervisorConfig for_machine(const smc::config::SupervisorConfig& plan,
                                                    const store::Machine& machine,
                                                    const std::string& config_id,
