@@ -188,7 +188,8 @@ async function main() {
     await page.waitForFunction(() => {
       const t = document.querySelector('#catalog')?.textContent ?? '';
       return t.includes('mill-2') && t.includes('bracket-tl') && t.includes('housing-js') &&
-        t.includes('cover-jsp') && t.includes('default tool fm-r25-4t is retired');
+        t.includes('cover-jsp') && t.includes('default tool fm-r25-4t is retired') &&
+        t.includes('wideband F_y (E)') && t.includes("cell's default");
     }, null, { timeout: 5000 });
     await page.screenshot({ path: join(ARTIFACTS, 'dashboard-cell.png'), fullPage: true });
 

@@ -510,8 +510,14 @@ TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
   const auto doc = dir_ / "mill-3.textproto";
   {
     std::ofstream f(doc);
+    // Its dynamometer samples the wideband channel once a period (2 kHz),
+    // and a tap test gave it the paper's structure (not validated: no SMC I).
     f << "machines { id: \"mill-3\" name: \"third mill\" max_spindle_power_w: 745.7 "
-         "max_feedrate_mm_s: 36 max_spindle_rpm: 3000 }\n";
+         "max_feedrate_mm_s: 36 max_spindle_rpm: 3000 wideband { samples_per_tick: 1 "
+         "cutoff_hz: 500 filter_order: 4 noise_rms_n: 2 } }\n"
+         "models { id: \"mill-3.tap\" machine_id: \"mill-3\" tool_id: \"fm-r25-4t\" "
+         "material_id: \"6061-T6\" milling_file: \""
+      << src("cell/models/paper_face_mill.textproto") << "\" provenance: PROVENANCE_IDENTIFIED }\n";
   }
   ASSERT_EQ(run_cmd({bin("smc-cell"), "--log-level", "warn", "catalog", "apply", doc.string(),
                      "--db", db_, "--author", "test", "--reason", "a third mill"}),
@@ -528,6 +534,26 @@ TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
   const auto j = *job(id);
   EXPECT_EQ(j.state, cfg::JOB_DONE);
   EXPECT_EQ(j.machine_id, "mill-3");
+  // What it was sent: mill-3's own channel and structure, and the edge's
+  // simulated mill sampled so (a count E did not expect holds the feed).
+  const std::string sent = output_of(
+      {bin("smc-cell"), "--log-level", "off", "job", "show", id, "--config", "--db", db_});
+  EXPECT_NE(sent.find("wideband_samples_per_tick: 1\n"), std::string::npos) << sent;
+  EXPECT_NE(sent.find("f_y_wide_samples_per_tick: 1\n"), std::string::npos) << sent;
+  EXPECT_NE(sent.find("wideband channel: 2 kHz through an order-4 filter at 500 Hz"),
+            std::string::npos)
+      << sent;
+  EXPECT_NE(sent.find("structure from model mill-3.tap"), std::string::npos) << sent;
+  const std::string planned =
+      output_of({bin("smc-cell"), "--log-level", "off", "plan", pinned.string(), "--db", db_});
+  EXPECT_NE(planned.find("machine: mill-3 (the job names it)"), std::string::npos) << planned;
+  EXPECT_NE(planned.find("module E's structure, given at dispatch: mill-3: model mill-3.tap;\n"),
+            std::string::npos)
+      << planned;
+  EXPECT_NE(planned.find("module E's channel on mill-3, from its record: 2 kHz, order-4 filter "
+                         "at 500 Hz"),
+            std::string::npos)
+      << planned;
   // Dashboards see the catalog with the new machine (smc_catalog, transient-local).
   smc::transport::Participant p({.partition = partition_});
   smc::wire::DocumentSubscriber<cfg::CatalogView> catalogs(p);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -589,6 +590,35 @@ void give_e_a_structure(smc::config::SupervisorConfig& c, const store::Machine& 
   c.set_explanation(c.explanation() + why.str());
 }
 
+// The machine's wideband F_y channel, where its record gives one, in place
+// of the cell's default: E undoes that channel's filter and noise and takes
+// the rules for its rate, and a simulated mill samples it so.
+void use_the_machines_channel(smc::config::SupervisorConfig& c, const store::Machine& machine) {
+  const auto& w = machine.wideband;
+  if (w.is_default()) return;
+  auto* op = c.mutable_operation();
+  op->set_wideband_samples_per_tick(w.samples_per_tick);
+  op->set_wideband_cutoff_hz(w.cutoff_hz);
+  op->set_wideband_filter_order(w.filter_order);
+  op->set_wideband_noise_rms_n(w.noise_rms_n);
+  auto* sim = c.mutable_simulation();
+  sim->set_f_y_wide_samples_per_tick(w.samples_per_tick);
+  sim->set_f_y_wide_cutoff_hz(w.cutoff_hz);
+  sim->set_f_y_wide_order(w.filter_order);
+  const double period =
+      c.operation().sample_period_s() > 0 ? c.operation().sample_period_s() : 5e-4;
+  const double rate_hz = w.samples_per_tick / period;
+  std::ostringstream why;
+  why << " Module E reads " << machine.id << "'s wideband channel: " << std::setprecision(3)
+      << rate_hz / 1000 << " kHz through an order-" << w.filter_order << " filter at "
+      << w.cutoff_hz << " Hz"
+      << (rate_hz < smc::supervision::kFineChannelRateHz * (1 - 1e-9)
+              ? ", with the rules chosen at 2 kHz"
+              : "")
+      << ".";
+  c.set_explanation(c.explanation() + why.str());
+}
+
 }  // namespace
 
 std::string Planner::structure_note(const smc::config::SupervisorConfig& plan,
@@ -608,6 +638,7 @@ smc::config::SupervisorConfig Planner::for_machine(const smc::config::Supervisor
   smc::config::SupervisorConfig c = plan;
   c.set_config_id(config_id);
   give_e_a_structure(c, machine, structure);
+  use_the_machines_channel(c, machine);
   auto* m = c.mutable_machine();
   m->set_machine_id(machine.id);
   m->set_max_spindle_power_w(machine.max_spindle_power_w);

@@ -125,7 +125,12 @@ SMC_CELL_COMMAND(plan, 11) {
                  in.machine.id.empty() ? "any machine" : in.machine.id.c_str());
     const auto plan = planner.plan(in, sel);
     std::printf("%s\n", plan.config.explanation().c_str());
-    std::printf("machine: %s\n", plan.machine_id.empty() ? "any" : plan.machine_id.c_str());
+    // The machine the job goes to: the plan's (SMC I), the one the job
+    // names, or any.
+    const std::string goes_to = !plan.machine_id.empty() ? plan.machine_id : job.spec.machine_id();
+    std::printf("machine: %s\n", !plan.machine_id.empty() ? plan.machine_id.c_str()
+                                 : !goes_to.empty() ? (goes_to + " (the job names it)").c_str()
+                                                    : "any");
     std::printf("passes:");
     for (const auto& p : plan.config.program().passes()) std::printf(" %.3f mm", p.depth_mm());
     if (!plan.machine_id.empty()) {
@@ -134,14 +139,28 @@ SMC_CELL_COMMAND(plan, 11) {
     }
     // A plan without a structure gets, at dispatch, its machine's for module
     // E (cell/README.md, "Module E's structure"): say which.
+    const auto machines = [&] {
+      std::vector<smc::cell::store::Machine> list;
+      for (auto& m : db.machines()) {
+        if (m.retired_at_ms == 0 && (goes_to.empty() || m.id == goes_to)) list.push_back(m);
+      }
+      return list;
+    }();
     if (smc::supervision::chatter_detector_without_structure(plan.config)) {
       std::printf("\nmodule E's structure, given at dispatch:");
-      for (const auto& m : db.machines()) {
-        if (m.retired_at_ms != 0 || (!plan.machine_id.empty() && m.id != plan.machine_id)) continue;
+      for (const auto& m : machines) {
         const auto model = smc::cell::structure_model(db, job, m.id);
         std::printf(" %s: %s;", m.id.c_str(),
                     model ? ("model " + model->id).c_str() : "none (E judges S alone)");
       }
+    }
+    // A machine's own wideband channel replaces the defaults' at dispatch
+    // (cell/README.md, "The machine's wideband channel").
+    for (const auto& m : machines) {
+      if (m.wideband.is_default()) continue;
+      std::printf("\nmodule E's channel on %s, from its record: %u kHz, order-%u filter at %g Hz",
+                  m.id.c_str(), 2 * m.wideband.samples_per_tick, m.wideband.filter_order,
+                  m.wideband.cutoff_hz);
     }
     std::printf("\nplanned in %.2f s\n", plan.planning_s);
     if (!out->empty()) {

@@ -58,7 +58,8 @@ namespace {
 
 const char* const kMachineCols =
     "SELECT id, name, max_spindle_power_w, max_feedrate_mm_s, max_spindle_rpm, min_spindle_rpm, "
-    "drive, COALESCE(retired_at_ms, 0) FROM machines ";
+    "drive, COALESCE(retired_at_ms, 0), wideband_samples_per_tick, wideband_cutoff_hz, "
+    "wideband_filter_order, wideband_noise_rms_n FROM machines ";
 const char* const kToolCols =
     "SELECT id, name, teeth, radius_mm, lead_angle_deg, COALESCE(retired_at_ms, 0) FROM tools ";
 const char* const kMaterialCols = "SELECT id, name, COALESCE(retired_at_ms, 0) FROM materials ";
@@ -72,8 +73,16 @@ const char* const kModelCols =
     "COALESCE(retired_at_ms, 0) FROM process_models ";
 
 Machine read_machine(const Stmt& s) {
-  return Machine{s.text(0), s.text(1), s.real(2), s.real(3),
-                 s.real(4), s.real(5), s.text(6), s.int64(7)};
+  return Machine{s.text(0),
+                 s.text(1),
+                 s.real(2),
+                 s.real(3),
+                 s.real(4),
+                 s.real(5),
+                 s.text(6),
+                 s.int64(7),
+                 WidebandChannel{static_cast<std::uint32_t>(s.int64(8)), s.real(9),
+                                 static_cast<std::uint32_t>(s.int64(10)), s.real(11)}};
 }
 Tool read_tool(const Stmt& s) {
   return Tool{s.text(0), s.text(1), static_cast<std::uint32_t>(s.int64(2)),
@@ -130,13 +139,20 @@ std::optional<T> read_one(Stmt& s, Read read) {
 void Store::put_machine(const Machine& m) {
   Stmt(db_.get(), path_,
        "INSERT INTO machines (id, name, max_spindle_power_w, max_feedrate_mm_s, max_spindle_rpm, "
-       "min_spindle_rpm, drive) VALUES (?, ?, ?, ?, ?, ?, ?) ON CONFLICT (id) DO UPDATE SET "
+       "min_spindle_rpm, drive, wideband_samples_per_tick, wideband_cutoff_hz, "
+       "wideband_filter_order, wideband_noise_rms_n) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
+       "ON CONFLICT (id) DO UPDATE SET "
        "name = excluded.name, max_spindle_power_w = excluded.max_spindle_power_w, "
        "max_feedrate_mm_s = excluded.max_feedrate_mm_s, "
        "max_spindle_rpm = excluded.max_spindle_rpm, min_spindle_rpm = excluded.min_spindle_rpm, "
-       "drive = excluded.drive")
+       "drive = excluded.drive, wideband_samples_per_tick = excluded.wideband_samples_per_tick, "
+       "wideband_cutoff_hz = excluded.wideband_cutoff_hz, "
+       "wideband_filter_order = excluded.wideband_filter_order, "
+       "wideband_noise_rms_n = excluded.wideband_noise_rms_n")
       .bind(m.id, m.name, m.max_spindle_power_w, m.max_feedrate_mm_s, m.max_spindle_rpm,
-            m.min_spindle_rpm, m.drive.empty() ? std::string("simulated") : m.drive)
+            m.min_spindle_rpm, m.drive.empty() ? std::string("simulated") : m.drive,
+            m.wideband.samples_per_tick, m.wideband.cutoff_hz, m.wideband.filter_order,
+            m.wideband.noise_rms_n)
       .run();
 }
 

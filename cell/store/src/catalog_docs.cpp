@@ -53,22 +53,39 @@ cfg::CatalogMachine to_doc(const Machine& m) {
   d.set_min_spindle_rpm(m.min_spindle_rpm);
   d.set_max_spindle_rpm(m.max_spindle_rpm);
   d.set_drive(m.drive.empty() ? "simulated" : m.drive);
+  if (!m.wideband.is_default()) {
+    auto* w = d.mutable_wideband();
+    w->set_samples_per_tick(m.wideband.samples_per_tick);
+    w->set_cutoff_hz(m.wideband.cutoff_hz);
+    w->set_filter_order(m.wideband.filter_order);
+    w->set_noise_rms_n(m.wideband.noise_rms_n);
+  }
   return d;
 }
 cfg::CatalogMachine normal(cfg::CatalogMachine d) {
   if (d.name().empty()) d.set_name(d.id());
   if (d.drive().empty()) d.set_drive("simulated");
+  // A channel given without its order has the edge's default, 2; one with
+  // nothing in it is the cell's default channel.
+  if (d.has_wideband() && d.wideband().samples_per_tick() != 0 &&
+      d.wideband().filter_order() == 0) {
+    d.mutable_wideband()->set_filter_order(2);
+  }
+  if (d.has_wideband() && d.wideband().ByteSizeLong() == 0) d.clear_wideband();
   return d;
 }
 Machine to_row(const cfg::CatalogMachine& d) {
-  return Machine{d.id(),
-                 d.name(),
-                 d.max_spindle_power_w(),
-                 d.max_feedrate_mm_s(),
-                 d.max_spindle_rpm(),
-                 d.min_spindle_rpm(),
-                 d.drive(),
-                 0};
+  const auto& w = d.wideband();
+  return Machine{
+      d.id(),
+      d.name(),
+      d.max_spindle_power_w(),
+      d.max_feedrate_mm_s(),
+      d.max_spindle_rpm(),
+      d.min_spindle_rpm(),
+      d.drive(),
+      0,
+      WidebandChannel{w.samples_per_tick(), w.cutoff_hz(), w.filter_order(), w.noise_rms_n()}};
 }
 
 cfg::CatalogTool to_doc(const Tool& t) {
@@ -209,6 +226,46 @@ void add_all(std::vector<FromFile<T>>& out, const std::string& file,
              const google::protobuf::RepeatedPtrField<T>& docs) {
   int i = 0;
   for (const auto& d : docs) out.push_back({file, i++, d});
+}
+
+// A machine's wideband channel: what the edge and its drives take. The edge
+// samples every 0.5 ms, so a channel of n samples a period runs at n x 2 kHz.
+void check_wideband(common::Diagnostics& problems, const std::string& where,
+                    const cfg::WidebandChannel& c, const std::string& drive) {
+  const auto n = c.samples_per_tick();
+  if (n == 0) {
+    problems.add(where + ".samples_per_tick", "is 0 but the channel's other fields are given",
+                 "give its samples per 0.5 ms period (1: 2 kHz ... 5: 10 kHz), or leave the "
+                 "whole wideband channel out for the cell's default");
+    return;
+  }
+  if (n > 5) {
+    problems.add(where + ".samples_per_tick", "must be 1-5, got " + std::to_string(n),
+                 "give the channel's samples per 0.5 ms period (the drives bring at most 5: "
+                 "10 kHz)");
+    return;
+  }
+  if (drive == "simulated" && 50 % n != 0) {
+    problems.add(where + ".samples_per_tick",
+                 std::to_string(n) + " does not divide the simulated mill's 50 steps a period",
+                 "use 1 (2 kHz), 2 (4 kHz) or 5 (10 kHz)");
+  }
+  const double nyquist = n * 1000.0;
+  if (!(std::isfinite(c.cutoff_hz()) && c.cutoff_hz() > 0 && c.cutoff_hz() < nyquist)) {
+    problems.add(where + ".cutoff_hz",
+                 "must be > 0 and below the channel's Nyquist frequency (" + num(nyquist) +
+                     " Hz), got " + num(c.cutoff_hz()),
+                 "give the anti-alias filter's cut-off, e.g. " + num(nyquist * 0.35) + " Hz");
+  }
+  if (c.filter_order() % 2 != 0 || c.filter_order() > 8) {
+    problems.add(where + ".filter_order",
+                 "must be even, 2-8, got " + std::to_string(c.filter_order()),
+                 "give the anti-alias filter's Butterworth order, e.g. 8");
+  }
+  if (!(std::isfinite(c.noise_rms_n()) && c.noise_rms_n() >= 0 && c.noise_rms_n() <= 1000)) {
+    problems.add(where + ".noise_rms_n", "must be 0-1000 N rms, got " + num(c.noise_rms_n()),
+                 "give the channel's noise, e.g. 2, or 0 for none taken out");
+  }
 }
 
 void read_one(const fs::path& path, CatalogDocuments& out, common::Diagnostics& problems) {
@@ -378,6 +435,7 @@ std::vector<CatalogChange> apply_catalog(Store& store, const CatalogDocuments& d
       problems.add(w + ".drive", "unknown drive '" + d.drive() + "'",
                    "use \"simulated\" or \"linuxcnc\"");
     }
+    if (d.has_wideband()) check_wideband(problems, w + ".wideband", d.wideband(), d.drive());
     const std::string diff = row ? difference(to_doc(*row), d) : "";
     changes.push_back({"machine", d.id(),
                        !row           ? "created"

@@ -224,6 +224,19 @@ CREATE TABLE job_programs (
   PRIMARY KEY (job_id, attempt, revision)
 );
 )sql"},
+    Migration{7, "a machine's wideband force channel", R"sql(
+-- The wideband F_y channel module E reads (smc.config.WidebandChannel):
+-- samples per 0.5 ms edge period (0: the cell's default channel), its
+-- anti-alias filter and its noise.
+ALTER TABLE machines ADD COLUMN wideband_samples_per_tick INTEGER NOT NULL DEFAULT 0
+  CHECK (wideband_samples_per_tick BETWEEN 0 AND 8);
+ALTER TABLE machines ADD COLUMN wideband_cutoff_hz REAL NOT NULL DEFAULT 0
+  CHECK (wideband_cutoff_hz >= 0);
+ALTER TABLE machines ADD COLUMN wideband_filter_order INTEGER NOT NULL DEFAULT 0
+  CHECK (wideband_filter_order BETWEEN 0 AND 8);
+ALTER TABLE machines ADD COLUMN wideband_noise_rms_n REAL NOT NULL DEFAULT 0
+  CHECK (wideband_noise_rms_n >= 0);
+)sql"},
 };
 
 }  // namespace

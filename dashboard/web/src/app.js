@@ -407,6 +407,14 @@ function renderSession() {
   }
 }
 
+// A machine's wideband F_y channel, which module E reads: its record's
+// (samples per 0.5 ms period), or the cell's default configuration's.
+function wideband(w) {
+  const n = w?.samples_per_tick ?? 0;
+  if (!n) return h('span', { class: 'muted' }, "cell's default");
+  return `${fmt(2 * n, 0)} kHz, order-${w.filter_order ?? 2} filter at ${fmt(w.cutoff_hz, 0)} Hz`;
+}
+
 // The cell's catalog, read-only (it changes through smc-cell catalog apply):
 // machines with their live state, parts with the SMC a job would get and why.
 function catalogTables() {
@@ -419,6 +427,7 @@ function catalogTables() {
       h('td', { class: 'strong' }, m.id), h('td', {}, m.name),
       h('td', {}, `${fmt(m.max_spindle_power_w, 1)} W`), h('td', {}, `${fmt(m.max_feedrate_mm_s, 1)} mm/s`),
       h('td', {}, `${fmt(m.min_spindle_rpm, 0)}-${fmt(m.max_spindle_rpm, 0)} rpm`), h('td', {}, m.drive),
+      h('td', {}, wideband(m.wideband)),
       h('td', {}, live ? edgeBadge(live) : h('span', { class: 'muted' }, 'not seen')));
   });
   const models = new Map((cat.models ?? []).map((m) => [m.id, m]));
@@ -441,7 +450,7 @@ function catalogTables() {
     h('tbody', {}, rows.length ? rows : h('tr', {}, h('td', { colspan: head.length, class: 'muted' }, empty))));
   return [
     h('h3', {}, 'Machines'),
-    table(['machine', 'name', 'power', 'feed', 'speed', 'drive', 'edge'], machines, 'No machines.'),
+    table(['machine', 'name', 'power', 'feed', 'speed', 'drive', 'wideband F_y (E)', 'edge'], machines, 'No machines.'),
     h('h3', {}, 'Parts'),
     table(['part', 'material', 'tool', 'programmed cut', 'a job would get', 'models', 'why'], parts, 'No parts.'),
   ];

@@ -100,6 +100,70 @@ TEST_F(CellCatalog, ApplyIsIdempotentShowsItsChangesAndRecordsThem) {
   EXPECT_EQ(s.history("machine", "mill-1").size(), h.size());
 }
 
+// A machine's wideband channel (module E's): kept, exported, updated, and
+// each field checked against what the edge and the machine's drive take.
+TEST_F(CellCatalog, AMachinesWidebandChannelIsKeptExportedAndChecked) {
+  Store s = seeded();
+  const std::string machine =
+      "machines { id: \"mill-3\" max_spindle_power_w: 745.7 max_feedrate_mm_s: 36 "
+      "max_spindle_rpm: 3000 ";
+  const std::string file =
+      doc("m.textproto", machine + "wideband { samples_per_tick: 1 cutoff_hz: 500 } }\n");
+  apply_catalog(s, load_catalog({file}), {});
+  const auto m3 = s.machine("mill-3");
+  ASSERT_TRUE(m3);
+  EXPECT_EQ(m3->wideband.samples_per_tick, 1u);
+  EXPECT_DOUBLE_EQ(m3->wideband.cutoff_hz, 500);
+  EXPECT_EQ(m3->wideband.filter_order, 2u) << "the edge's default order, written down";
+  EXPECT_DOUBLE_EQ(m3->wideband.noise_rms_n, 0);
+  EXPECT_TRUE(s.machine("mill-1")->wideband.is_default()) << "the demo's mills: the default";
+  for (const auto& c : apply_catalog(s, load_catalog({file}), {})) {
+    EXPECT_EQ(c.action, "unchanged") << c.kind << " " << c.id << ": " << c.detail;
+  }
+  const auto exported = export_catalog(s);
+  int with_channel = 0;
+  for (const auto& m : exported.machines()) {
+    if (!m.has_wideband()) continue;
+    ++with_channel;
+    EXPECT_EQ(m.id(), "mill-3");
+    EXPECT_EQ(m.wideband().filter_order(), 2u);
+  }
+  EXPECT_EQ(with_channel, 1) << "a default channel is not written out";
+  const std::string faster =
+      doc("m2.textproto", machine +
+                              "wideband { samples_per_tick: 5 cutoff_hz: 3500 filter_order: 8 "
+                              "noise_rms_n: 2 } }\n");
+  const auto changed = apply_catalog(s, load_catalog({faster}), {});
+  ASSERT_EQ(changed.size(), 1u);
+  EXPECT_EQ(changed[0].action, "updated");
+  EXPECT_THAT(changed[0].detail, HasSubstr("wideband.samples_per_tick"));
+  EXPECT_EQ(s.machine("mill-3")->wideband.samples_per_tick, 5u);
+
+  const auto bad = [&](const std::string& channel, const std::string& drive = "simulated") {
+    return refused(machine + "drive: \"" + drive + "\" wideband { " + channel + " } }\n");
+  };
+  EXPECT_THAT(bad("cutoff_hz: 500"), HasSubstr("'mill-3'.wideband.samples_per_tick: is 0 but"));
+  EXPECT_THAT(bad("samples_per_tick: 6 cutoff_hz: 500"),
+              HasSubstr("wideband.samples_per_tick: must be 1-5, got 6"));
+  EXPECT_THAT(bad("samples_per_tick: 3 cutoff_hz: 500"),
+              HasSubstr("does not divide the simulated mill's 50 steps"));
+  EXPECT_THAT(bad("samples_per_tick: 1 cutoff_hz: 1000"),
+              HasSubstr("wideband.cutoff_hz: must be > 0 and below the channel's Nyquist "
+                        "frequency (1000 Hz), got 1000"));
+  EXPECT_THAT(bad("samples_per_tick: 1 cutoff_hz: 500 filter_order: 3"),
+              HasSubstr("wideband.filter_order: must be even, 2-8, got 3"));
+  EXPECT_THAT(bad("samples_per_tick: 1 cutoff_hz: 500 noise_rms_n: -1"),
+              HasSubstr("wideband.noise_rms_n: must be 0-1000 N rms, got -1"));
+  EXPECT_THAT(bad("samples_per_tick: 1 cutoff_hz: nan"), HasSubstr("fix:"));
+  // A LinuxCNC drive takes any count its dynamometer brings, up to 5.
+  apply_catalog(s,
+                load_catalog({doc("m3.textproto",
+                                  machine + "drive: \"linuxcnc\" wideband { samples_per_tick: 3 "
+                                            "cutoff_hz: 2000 filter_order: 4 } }\n")}),
+                {});
+  EXPECT_EQ(s.machine("mill-3")->wideband.samples_per_tick, 3u);
+}
+
 // One document per kind with each class of error.
 TEST_F(CellCatalog, BadDocumentsAreRefusedNamingFileFieldAndFix) {
   // Wrong type (a parse error: file:line:col).

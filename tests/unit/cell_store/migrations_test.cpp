@@ -65,6 +65,37 @@ TEST_F(CellStoreMigrations, ReopeningChangesNothing) {
             before);
 }
 
+// A database of the version before (6: no machine channel) opened by this
+// smc-cell gains the columns, and its machines keep their rows with the
+// cell's default channel.
+TEST_F(CellStoreMigrations, AnOlderDatabaseIsMigratedKeepingItsMachines) {
+  {
+    Store s = Store::open(db_path());
+    s.put_machine(Machine{"mill-1", "the paper's mill", 745.7, 36, 3000});
+  }
+  {
+    Raw raw(db_path());
+    for (const char* c : {"wideband_samples_per_tick", "wideband_cutoff_hz",
+                          "wideband_filter_order", "wideband_noise_rms_n"}) {
+      raw.exec(std::string("ALTER TABLE machines DROP COLUMN ") + c);
+    }
+    raw.exec("DELETE FROM schema_migrations WHERE version = 7");
+    ASSERT_EQ(raw.text("SELECT MAX(version) FROM schema_migrations"), "6");
+  }
+  Store s = Store::open(db_path(), OpenMode::kExisting);
+  EXPECT_EQ(s.schema_version(), 7);
+  const auto m = s.machine("mill-1");
+  ASSERT_TRUE(m);
+  EXPECT_DOUBLE_EQ(m->max_spindle_power_w, 745.7);
+  EXPECT_TRUE(m->wideband.is_default());
+  Machine with = *m;
+  with.wideband = {.samples_per_tick = 1, .cutoff_hz = 500, .filter_order = 2};
+  s.put_machine(with);
+  EXPECT_EQ(s.machine("mill-1")->wideband.samples_per_tick, 1u);
+  with.wideband.samples_per_tick = 9;
+  EXPECT_THROW(s.put_machine(with), StoreError) << "the schema's CHECK holds too";
+}
+
 TEST_F(CellStoreMigrations, NewerDatabaseIsRefusedAndLeftUntouched) {
   { Store::open(db_path()); }
   const int newer = Store::latest_schema_version() + 1;

@@ -13,6 +13,16 @@
 
 namespace smc::cell::store {
 
+// A machine's wideband F_y channel, which module E reads
+// (smc.config.WidebandChannel). samples_per_tick 0: the cell's defaults.
+struct WidebandChannel {
+  std::uint32_t samples_per_tick = 0;  // per 0.5 ms edge period: 1 (2 kHz) to 5 (10 kHz)
+  double cutoff_hz = 0;
+  std::uint32_t filter_order = 0;
+  double noise_rms_n = 0;
+  bool is_default() const noexcept { return samples_per_tick == 0; }
+};
+
 struct Machine {
   std::string id;  // "mill-1"
   std::string name;
@@ -22,6 +32,7 @@ struct Machine {
   double min_spindle_rpm = 0;
   std::string drive = "simulated";  // or "linuxcnc"
   std::int64_t retired_at_ms = 0;   // 0: in use
+  WidebandChannel wideband;         // schema v7
 };
 
 struct Tool {
