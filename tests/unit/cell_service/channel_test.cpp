@@ -157,12 +157,13 @@ TEST_F(MachineChannel, AJobShopJobIsJudgedAtTheMachinesOwnRate) {
     ASSERT_GT(c->summary.chatter_detected_s(), 0);
     EXPECT_LE(revolutions_late(c->summary, 1500), 3.0) << c->summary.ShortDebugString();
   }
-  std::printf("housing-js on the paper's mill: 2 kHz channel onset %.4f s detected %.4f s "
-              "(%.2f rev), %u events; 10 kHz onset %.4f s detected %.4f s (%.2f rev), %u events\n",
-              at_2k.summary.chatter_onset_s(), at_2k.summary.chatter_detected_s(),
-              revolutions_late(at_2k.summary, 1500), at_2k.summary.chatter_events(),
-              at_10k.summary.chatter_onset_s(), at_10k.summary.chatter_detected_s(),
-              revolutions_late(at_10k.summary, 1500), at_10k.summary.chatter_events());
+  std::printf(
+      "housing-js on the paper's mill: 2 kHz channel onset %.4f s detected %.4f s "
+      "(%.2f rev), %u events; 10 kHz onset %.4f s detected %.4f s (%.2f rev), %u events\n",
+      at_2k.summary.chatter_onset_s(), at_2k.summary.chatter_detected_s(),
+      revolutions_late(at_2k.summary, 1500), at_2k.summary.chatter_events(),
+      at_10k.summary.chatter_onset_s(), at_10k.summary.chatter_detected_s(),
+      revolutions_late(at_10k.summary, 1500), at_10k.summary.chatter_events());
 }
 
 // The record says 2 kHz but the machine's dynamometer brings 10 kHz (or the
