@@ -76,6 +76,7 @@ void ConfigIntake::run() {
 
 std::unique_ptr<SimulatedMill> EdgeService::Impl::simulated_mill(
     const smc::config::SupervisorConfig& cfg, double sample_period_s) const {
+  check_wideband_channel_agrees(cfg);
   smc::config::MillingModel model = cfg.milling_model();
   smc::config::SimulatedMill sim = cfg.simulation();
   for (const auto& b : opt.tooth_breaks) {

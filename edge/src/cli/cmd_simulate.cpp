@@ -189,6 +189,13 @@ void add_simulate(CLI::App& app) {
                    "alone; give it the machine's structure for its vibration estimate\n",
                    args->config.c_str());
     }
+    if (args->drive != "linuxcnc" && args->replay.empty()) {
+      try {
+        check_wideband_channel_agrees(raw);  // the configuration as given, before the plant's
+      } catch (const ConfigError& e) {
+        throw Failure(2, args->config + ": " + e.what());
+      }
+    }
     if (args->feed_lag_ms >= 0) {
       raw.mutable_simulation()->set_feed_drive_lag_s(args->feed_lag_ms / 1000.0);
     }

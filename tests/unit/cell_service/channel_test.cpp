@@ -87,12 +87,17 @@ struct Cut {
   cfg::RunSummary summary;
 };
 
-// `config` cut in virtual time on the paper's mill, which samples its
+const char* const kPapersMill = "cell/models/paper_face_mill.textproto";
+// Tool 25 % less stiff and 30 % less damped, material forces 20 % higher.
+const char* const kMismatchedMill = "cell/models/paper_face_mill_mismatched.textproto";
+
+// `config` cut in virtual time on the mill `plant`, which samples its
 // wideband channel as `sim` says (the configuration's own by default).
-Cut cut(const cfg::SupervisorConfig& config, const cfg::SimulatedMill* sim = nullptr) {
+Cut cut(const cfg::SupervisorConfig& config, const cfg::SimulatedMill* sim = nullptr,
+        const char* plant = kPapersMill) {
   const auto vc = sv::validate(config);
   cfg::MillingModel own;
-  smc::documents::load(src("cell/models/paper_face_mill.textproto"), own);
+  smc::documents::load(src(plant), own);
   *own.mutable_cutter() = config.milling_model().cutter();
   *own.mutable_workpiece() = config.milling_model().workpiece();
   smc::edge::SimulatedMill mill(own, sim != nullptr ? *sim : config.simulation(),
@@ -144,26 +149,31 @@ TEST_F(MachineChannel, TheMachinesRecordSetsTheChannelItsConfigurationsCarry) {
       << "the 10 kHz rules";
 }
 
-// The housing chatters at its programmed depth on the paper's mill (the
-// demo's job-shop job). Cut by a mill that samples at 2 kHz, E judges it at
-// that rate and catches it; the figures are printed for the record.
+// The housing chatters at its programmed depth (the demo's job-shop job).
+// Cut by a mill that samples at 2 kHz, E judges it at that rate and catches
+// it, on the paper's mill and on one that is not the cell's model; the
+// figures are printed for the record.
 TEST_F(MachineChannel, AJobShopJobIsJudgedAtTheMachinesOwnRate) {
-  const auto at_2k = cut(sent_to("mill-3"));
-  const auto at_10k = cut(sent_to("mill-1"));
-  for (const auto* c : {&at_2k, &at_10k}) {
-    EXPECT_TRUE(c->completed) << smc::edge::to_string(c->fault);
-    EXPECT_GE(c->summary.chatter_events(), 1u);
-    ASSERT_GT(c->summary.chatter_onset_s(), 0);
-    ASSERT_GT(c->summary.chatter_detected_s(), 0);
-    EXPECT_LE(revolutions_late(c->summary, 1500), 3.0) << c->summary.ShortDebugString();
+  for (const char* plant : {kPapersMill, kMismatchedMill}) {
+    const auto at_2k = cut(sent_to("mill-3"), nullptr, plant);
+    const auto at_10k = cut(sent_to("mill-1"), nullptr, plant);
+    for (const auto* c : {&at_2k, &at_10k}) {
+      EXPECT_TRUE(c->completed) << plant << ": " << smc::edge::to_string(c->fault);
+      EXPECT_GE(c->summary.chatter_events(), 1u) << plant;
+      ASSERT_GT(c->summary.chatter_onset_s(), 0) << plant;
+      ASSERT_GT(c->summary.chatter_detected_s(), 0) << plant;
+      EXPECT_LE(revolutions_late(c->summary, 1500), 3.0)
+          << plant << ": " << c->summary.ShortDebugString();
+    }
+    std::printf(
+        "housing-js on %s: 2 kHz channel onset %.4f s detected %.4f s (%.2f rev), %u events, "
+        "%u passes; 10 kHz onset %.4f s detected %.4f s (%.2f rev), %u events, %u passes\n",
+        plant, at_2k.summary.chatter_onset_s(), at_2k.summary.chatter_detected_s(),
+        revolutions_late(at_2k.summary, 1500), at_2k.summary.chatter_events(),
+        at_2k.summary.passes_completed(), at_10k.summary.chatter_onset_s(),
+        at_10k.summary.chatter_detected_s(), revolutions_late(at_10k.summary, 1500),
+        at_10k.summary.chatter_events(), at_10k.summary.passes_completed());
   }
-  std::printf(
-      "housing-js on the paper's mill: 2 kHz channel onset %.4f s detected %.4f s "
-      "(%.2f rev), %u events; 10 kHz onset %.4f s detected %.4f s (%.2f rev), %u events\n",
-      at_2k.summary.chatter_onset_s(), at_2k.summary.chatter_detected_s(),
-      revolutions_late(at_2k.summary, 1500), at_2k.summary.chatter_events(),
-      at_10k.summary.chatter_onset_s(), at_10k.summary.chatter_detected_s(),
-      revolutions_late(at_10k.summary, 1500), at_10k.summary.chatter_events());
 }
 
 // The record says 2 kHz but the machine's dynamometer brings 10 kHz (or the

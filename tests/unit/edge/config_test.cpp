@@ -10,6 +10,7 @@
 #include "edge_test_config.hpp"
 #include "smc/edge/core.hpp"
 #include "smc/edge/replay_drive.hpp"
+#include "smc/edge/sim_mill.hpp"
 #include "smc_config.pb.h"
 
 using namespace smc::edge;
@@ -98,6 +99,34 @@ TEST(EdgeConfig, AnySpeedInTheRangeIsAcceptedWhateverTheSlowPeriod) {
   auto cfg = test::shipped_config("smc2.textproto");
   cfg.mutable_program()->mutable_passes(0)->set_spindle_rpm(1100);
   EXPECT_NO_THROW((void)edge_config_from_proto(cfg));
+}
+
+// A configuration whose module E expects another count of wideband samples
+// than its simulated mill gives is refused before it runs (the edge's
+// intake and `smc-edge simulate` call this), not held at the first contact.
+// E judging S alone never reads the channel, so there it does not matter.
+TEST(EdgeConfig, AWidebandChannelTheSimulatedMillDoesNotGiveIsRefused) {
+  auto cfg = test::shipped_config("smc2.textproto");
+  EXPECT_NO_THROW(check_wideband_channel_agrees(cfg));
+  cfg.mutable_operation()->set_wideband_samples_per_tick(1);
+  try {
+    check_wideband_channel_agrees(cfg);
+    ADD_FAILURE() << "accepted E at 1 sample a period on a mill that gives 5";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("operation.wideband_samples_per_tick: module E expects 1 wideband "
+                        "samples a period, but the simulated mill gives 5"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("fix:"), std::string::npos) << what;
+  }
+  cfg.mutable_simulation()->set_f_y_wide_samples_per_tick(0);  // 0: one a period
+  EXPECT_NO_THROW(check_wideband_channel_agrees(cfg));
+  cfg.mutable_simulation()->set_f_y_wide_samples_per_tick(2);
+  EXPECT_THROW(check_wideband_channel_agrees(cfg), ConfigError);
+  cfg.mutable_milling_model()->mutable_structure()->clear_tool_y();
+  cfg.mutable_milling_model()->mutable_structure()->clear_part_y();
+  EXPECT_NO_THROW(check_wideband_channel_agrees(cfg)) << "S alone reads no wideband channel";
 }
 
 TEST(ReplayDrive, MalformedRowsNameFileLineAndColumn) {

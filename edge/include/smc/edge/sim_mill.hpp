@@ -19,6 +19,7 @@
 namespace smc::config {
 class MillingModel;
 class SimulatedMill;
+class SupervisorConfig;
 }  // namespace smc::config
 
 namespace smc::edge {
@@ -28,6 +29,14 @@ namespace smc::edge {
 // job's geometry) where `configured` has them. `smc-edge run --mill-model`
 // and `smc-edge simulate --mill-model` simulate their mill this way.
 void use_plant_model(smc::config::MillingModel& configured, smc::config::MillingModel plant);
+
+// Throws ConfigError when module E will read the wideband channel (it runs
+// with a structure in y) at another count of samples a period than the
+// simulated mill gives it (operation.wideband_samples_per_tick against
+// simulation.f_y_wide_samples_per_tick): E would hold the feed at the
+// first sample in contact, so such a configuration is refused before it
+// runs. Where E judges S alone it never reads the channel.
+void check_wideband_channel_agrees(const smc::config::SupervisorConfig& cfg);
 
 class SimulatedMill final : public Drive {
  public:
