@@ -170,6 +170,7 @@ void EdgeService::Impl::on_event(const EdgeEvent& e) {
       std::string why = std::string("fault hold: ") + to_string(e.fault);
       if (e.module >= 0)
         why += " in module " + std::string(1, letter(static_cast<ModuleId>(e.module)));
+      if (e.why != nullptr) why += std::string(": ") + e.why;
       set_state(smc_data_EDGE_FAULT, why);
       break;
     }

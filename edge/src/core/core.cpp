@@ -200,7 +200,7 @@ EdgeEvent EdgeCore::make_event(EventKind kind) const noexcept {
 
 void EdgeCore::emit(EventKind kind) noexcept { events_.try_push(make_event(kind)); }
 
-void EdgeCore::raise_fault(Fault f, int module, double value) noexcept {
+void EdgeCore::raise_fault(Fault f, int module, double value, const char* why) noexcept {
   if (fault_hold_) return;  // the first cause is the one reported
   fault_ = f;
   fault_hold_ = true;
@@ -209,6 +209,7 @@ void EdgeCore::raise_fault(Fault f, int module, double value) noexcept {
   e.fault = f;
   e.module = static_cast<int8_t>(module);
   e.value = value;
+  e.why = why;
   events_.try_push(e);
 }
 
@@ -216,13 +217,16 @@ void EdgeCore::run_module(Module& m, bool sample_hook) noexcept {
   const int id = static_cast<int>(m.id());
   if (!check_declarations_) {
     const Status st = sample_hook ? m.on_sample(s_) : m.update(s_);
-    if (st != Status::kOk) raise_fault(Fault::kModuleError, id, 0);
+    if (st != Status::kOk) raise_fault(Fault::kModuleError, id, 0, m.error_reason());
     return;
   }
   const Signals before = s_;
   const Status st = sample_hook ? m.on_sample(s_) : m.update(s_);
   const SignalMask undeclared = changed_signals(before, s_) & ~m.writes();
-  if (st != Status::kOk || undeclared != 0) raise_fault(Fault::kModuleError, id, undeclared);
+  if (st != Status::kOk || undeclared != 0) {
+    raise_fault(Fault::kModuleError, id, undeclared,
+                st != Status::kOk ? m.error_reason() : "it wrote signals it does not declare");
+  }
 }
 
 ModuleMask EdgeCore::apply_situation() noexcept {

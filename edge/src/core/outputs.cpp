@@ -1,5 +1,6 @@
 // Files written by smc-edge simulate.
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -99,6 +100,11 @@ void write_outputs(const std::string& dir, const EdgeCore& core, const RunResult
         detail = to_string(e.fault);
         if (e.module >= 0)
           detail += " in module " + std::string(1, letter(static_cast<ModuleId>(e.module)));
+        if (e.why != nullptr) {
+          std::string why = e.why;
+          std::replace(why.begin(), why.end(), ',', ';');  // one CSV field
+          detail += " (" + why + ")";
+        }
       } else if (e.kind == EventKind::kChatterDetected) {
         char buf[96];
         std::snprintf(buf, sizeof buf, "ratio %.3f at %.0f Hz", e.ratio, e.frequency_hz);

@@ -394,6 +394,7 @@ smc::config::RunSummary summarize(const EdgeCore& core, const RunResult& run) {
                        (e.fault == Fault::kModuleError && e.module >= 0
                             ? std::string(" in module ") + letter(static_cast<ModuleId>(e.module))
                             : std::string()) +
+                       (e.why != nullptr ? std::string(" (") + e.why + ")" : std::string()) +
                        " at t=" + std::to_string(e.t_s) + " s");
         break;
       default:

@@ -103,7 +103,10 @@ Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
   // says it brings (operation.wideband_samples_per_tick), or the drive and
   // E disagree on its rate, and the estimate would be wrong: an error (the
   // core holds the feed).
-  if (per_tick_ > 1 ? in.wide_count != per_tick_ : in.wide_count > 1) return Status::kError;
+  if (per_tick_ > 1 ? in.wide_count != per_tick_ : in.wide_count > 1) {
+    // (Short enough for the edge status's 127 characters with its prefix.)
+    return fail("wideband samples a period differ from operation.wideband_samples_per_tick");
+  }
   const double* f = per_tick_ > 1 ? in.f_y_wide_sub_n : &in.f_y_wide_n;
   for (int j = 0; j < per_tick_; ++j) {
     if (!std::isfinite(f[j])) {
@@ -340,7 +343,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   }
   double freq = 0;
   const double ratio = statistic(samples, s.spindle_rpm, &freq);
-  if (!std::isfinite(ratio)) return Status::kError;
+  if (!std::isfinite(ratio)) return fail("the chatter statistic of the revolution is not finite");
   // Entering or leaving the part, or while a controller moves the feed
   // fast, the mean force changes from one revolution to the next and the
   // revolution is not a repetition of the one before: no decision then.

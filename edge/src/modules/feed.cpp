@@ -52,8 +52,10 @@ Status OperatorChatterDetector::update(Signals& s) noexcept {
 Status ChatterSuppressor::update(Signals& s) noexcept {
   if (s.rewrite_requests == served_) return Status::kOk;
   served_ = s.rewrite_requests;
-  if (program_ == nullptr) return Status::kError;
-  if (!add_one_pass(program_->program, program_->current_pass)) return Status::kError;
+  if (program_ == nullptr) return fail("no program to rewrite");
+  if (!add_one_pass(program_->program, program_->current_pass)) {
+    return fail("the program has no room for another pass (16 at most)");
+  }
   s.program_rewritten = true;
   return Status::kOk;
 }

@@ -114,7 +114,9 @@ Status SpindlePowerMonitor::update(Signals& s) noexcept {
     const double f_ref = limit / (v * rho_ahead) * std::min(1.0, limit / mean);
     s.force_reference_scale = std::clamp(f_ref / s.force_reference_base_n, kMinScale, cap);
   }
-  return std::isfinite(s.force_reference_scale) ? Status::kOk : Status::kError;
+  return std::isfinite(s.force_reference_scale)
+             ? Status::kOk
+             : fail("the spindle power's force reference is not finite");
 }
 
 // ------------------------------------------------------------------- H --
@@ -138,7 +140,9 @@ Status ParameterEstimator::update(Signals& s) noexcept {
   if (!s.f_y_updated || !s.contact || f <= 0) return Status::kOk;
   const double phi = std::pow(f, p_.adaptive_feed_exponent);
   const double y = s.f_y_peak_n;
-  if (!std::isfinite(phi) || !std::isfinite(y) || phi <= 0) return Status::kError;
+  if (!std::isfinite(phi) || !std::isfinite(y) || phi <= 0) {
+    return fail("the gain estimate's regressor or the revolution's F_y is not finite");
+  }
   if (!initialised_) {
     // First measurement: the one-sample estimate, with a covariance that lets
     // the next few revolutions move it freely.
@@ -154,7 +158,9 @@ Status ParameterEstimator::update(Signals& s) noexcept {
     // Bound the covariance so forgetting cannot blow it up without excitation.
     covariance_ = std::min(covariance_, 100.0 / (phi * phi));
   }
-  if (!(theta_ > 0) || !std::isfinite(theta_)) return Status::kError;
+  if (!(theta_ > 0) || !std::isfinite(theta_)) {
+    return fail("the estimated process gain is not positive and finite");
+  }
   s.gain_estimate = theta_;
   s.gain_valid = true;
   return Status::kOk;
@@ -240,7 +246,9 @@ Status AdaptiveForceController::update(Signals& s) noexcept {
   }
   s.controller_feed_per_tooth_mm = law_.feed_per_tooth();
   s.controller_valid = true;
-  return std::isfinite(s.controller_feed_per_tooth_mm) ? Status::kOk : Status::kError;
+  return std::isfinite(s.controller_feed_per_tooth_mm)
+             ? Status::kOk
+             : fail("the force controller's feed is not finite");
 }
 
 // ------------------------------------------------------------------- L --
@@ -262,7 +270,9 @@ void ModelBasedForceController::reset() noexcept { started_ = false; }
 Status ModelBasedForceController::update(Signals& s) noexcept {
   // G = K d^beta, in N per (mm/tooth)^alpha.
   const double gain = 1000.0 * p_.model_k_kn * std::pow(s.depth_mm, p_.model_beta);
-  if (!(gain > 0) || !std::isfinite(gain)) return Status::kError;
+  if (!(gain > 0) || !std::isfinite(gain)) {
+    return fail("the force model's gain at this depth is not positive and finite");
+  }
   if (!started_) {
     // Start at the model's feed for the reference, never above the program.
     const double model_feed = std::pow(s.force_reference_n / gain, 1.0 / p_.model_alpha);
@@ -275,7 +285,9 @@ Status ModelBasedForceController::update(Signals& s) noexcept {
   }
   s.controller_feed_per_tooth_mm = law_.feed_per_tooth();
   s.controller_valid = true;
-  return std::isfinite(s.controller_feed_per_tooth_mm) ? Status::kOk : Status::kError;
+  return std::isfinite(s.controller_feed_per_tooth_mm)
+             ? Status::kOk
+             : fail("the force controller's feed is not finite");
 }
 
 }  // namespace smc::edge

@@ -383,7 +383,7 @@ Status ToolBreakageDetector::on_sample(Signals& s) noexcept {
     lead_ = last_force_;
   }
   const double force = std::sqrt(f.f_x_n * f.f_x_n + f.f_y_n * f.f_y_n + f.f_z_n * f.f_z_n);
-  if (!std::isfinite(force)) return Status::kError;
+  if (!std::isfinite(force)) return fail("a force sample is not finite");
   last_force_ = force;
   if (count_ >= stride_) return Status::kOk;  // a window longer than the longest revolution's
   current_[static_cast<size_t>(count_)] =
@@ -447,7 +447,11 @@ Status SpindleSpeedChatterSuppressor::update(Signals& s) noexcept {
     return Status::kOk;
   }
   // The spindle did not get there: a module error holds the feed.
-  return elapsed_s_ > p_.speed_change_timeout_s ? Status::kError : Status::kOk;
+  return elapsed_s_ > p_.speed_change_timeout_s
+             ? fail(
+                   "the spindle did not reach the new speed within "
+                   "operation.speed_change_timeout_s")
+             : Status::kOk;
 }
 
 }  // namespace smc::edge

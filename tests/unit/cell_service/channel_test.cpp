@@ -189,6 +189,11 @@ TEST_F(MachineChannel, ARecordThatDoesNotMatchTheMachinesChannelHoldsTheFeed) {
   EXPECT_FALSE(wrong.completed);
   EXPECT_EQ(wrong.fault, smc::edge::Fault::kModuleError) << smc::edge::to_string(wrong.fault);
   EXPECT_EQ(wrong.summary.chatter_events(), 0u);
+  ASSERT_EQ(wrong.summary.faults_size(), 1);
+  EXPECT_NE(wrong.summary.faults(0).find("module error in module E (wideband samples a period "
+                                         "differ from operation.wideband_samples_per_tick)"),
+            std::string::npos)
+      << wrong.summary.faults(0);
 
   // And the other way round: the record's default 10 kHz on a 2 kHz sensor.
   const auto plain = sent_to("mill-1");

@@ -811,6 +811,12 @@ TEST(AutomaticChatterDetector, AWidebandChannelAtAnotherRateIsAnError) {
       const bool agrees = expected == 1 ? brought == 0 : brought == expected;
       EXPECT_EQ(e.on_sample(s), agrees ? Status::kOk : Status::kError)
           << expected << " expected, " << brought << " brought";
+      if (!agrees) {
+        ASSERT_NE(e.error_reason(), nullptr);
+        EXPECT_STREQ(e.error_reason(),
+                     "wideband samples a period differ from operation.wideband_samples_per_tick")
+            << "the fault hold says why";
+      }
     }
     s.sample.f_y_wide_n = std::nan("");
     s.sample.wide_count = 0;

@@ -62,6 +62,9 @@ struct EdgeEvent {
   double t_s = 0;
   Fault fault = Fault::kNone;
   int8_t module = -1;  // ModuleId for kModuleError, else -1
+  // kModuleError: the module's reason (Module::error_reason, a static
+  // string), or nullptr.
+  const char* why = nullptr;
   uint64_t active_steps = 0;
   ModuleMask active = 0;
   uint32_t inputs = 0;
@@ -166,7 +169,7 @@ class EdgeCore {
     int n_sample = 0, n_revolution = 0, n_fast = 0, n_event = 0, n_after = 0, n_starting = 0;
   };
 
-  void raise_fault(Fault f, int module, double value) noexcept;
+  void raise_fault(Fault f, int module, double value, const char* why = nullptr) noexcept;
   void run_module(Module& m, bool sample_hook) noexcept;
   // Applies the new situation; returns the modules that started (became
   // active or were reset) in this tick.

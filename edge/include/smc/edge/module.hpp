@@ -78,8 +78,21 @@ class Module {
   // Once per period() while active (or when requested(), for kEvent).
   virtual Status update(Signals& s) noexcept = 0;
 
+  // Why the last kError was returned: a static string naming the cause and,
+  // where there is one, the field that fixes it (the fault hold's reason).
+  // nullptr: none given.
+  const char* error_reason() const noexcept { return error_; }
+
+ protected:
+  // Returns kError, keeping `why` (a string literal: nothing is allocated).
+  Status fail(const char* why) noexcept {
+    error_ = why;
+    return Status::kError;
+  }
+
  private:
   ModuleId id_;
+  const char* error_ = nullptr;
 };
 
 }  // namespace smc::edge
