@@ -1105,21 +1105,27 @@ TEST_F(LinuxCncWideband, FiveSamplesAPeriodReachModuleE) {
   EXPECT_GT(q.revolutions, 250);  // of about 320 in the cut
   EXPECT_EQ(fast.chatter_events(), 0u) << "runout read as chatter";
   EXPECT_EQ(fast.faults_size(), 0) << smc::documents::to_json(fast);
-  // An edge that expects one sample a period gets five: E fails, the feed
-  // is held, and the run's summary names the module's error.
+  // An edge that expects one sample a period gets five: the drive reads the
+  // dynamometer's count before anything moves and refuses the run, naming
+  // both fields and the fix (before, E failed in the cut and held the feed
+  // there).
   auto c = smc::documents::load_supervisor_config(config_);
   c.mutable_operation()->set_wideband_samples_per_tick(1);
   std::string text;
   ASSERT_TRUE(google::protobuf::TextFormat::PrintToString(c, &text));
   const std::string once = write("once.textproto", text);
+  const double x_before = pin("joint.0.pos-fb");
   const std::string out = simulate(once, "once", &st, 15);
-  EXPECT_EQ(st, 3) << "held until the time limit: " << out;
-  cfg::RunSummary held;
-  smc::documents::load((dir_ / "once" / "summary.json").string(), held);
-  ASSERT_EQ(held.faults_size(), 1) << smc::documents::to_json(held);
-  std::printf("told one sample a period: exit %d, fault '%s'\n", st, held.faults(0).c_str());
-  EXPECT_NE(held.faults(0).find("module error in module E"), std::string::npos) << held.faults(0);
-  EXPECT_EQ(held.chatter_events(), 0u);
+  EXPECT_DOUBLE_EQ(pin("joint.0.pos-fb"), x_before) << "the axis did not move";
+  std::printf("told one sample a period: exit %d: %s\n", st, out.c_str());
+  EXPECT_EQ(st, 2) << "refused before the run: " << out;
+  EXPECT_NE(out.find("LinuxCNC's dynamometer gives module E's wideband channel 5 samples a "
+                     "period (smc-force-y-wide-samples), but the configuration says 1 "
+                     "(operation.wideband_samples_per_tick)"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("nothing was moved"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "once" / "summary.json")) << "no run";
 }
 
 // A machine that is not homed refuses the run before anything moves, naming

@@ -21,13 +21,9 @@ void use_plant_model(smc::config::MillingModel& configured, smc::config::Milling
 }
 
 void check_wideband_channel_agrees(const smc::config::SupervisorConfig& cfg) {
-  const auto& mods = cfg.modules();
-  const auto& st = cfg.milling_model().structure();
-  const bool reads_channel = std::find(mods.begin(), mods.end(), "E") != mods.end() &&
-                             st.tool_y_size() + st.part_y_size() > 0;
-  const auto expects = std::max(1U, cfg.operation().wideband_samples_per_tick());
+  const auto expects = supervision::wideband_samples_e_takes(cfg);
   const auto brings = std::max(1U, cfg.simulation().f_y_wide_samples_per_tick());
-  if (!reads_channel || expects == brings) return;
+  if (expects == 0 || expects == brings) return;
   throw ConfigError(
       "operation.wideband_samples_per_tick: module E expects " + std::to_string(expects) +
       " wideband samples a period, but the simulated mill gives " + std::to_string(brings) +

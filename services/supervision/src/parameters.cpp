@@ -333,6 +333,14 @@ bool chatter_detector_without_structure(const smc::config::SupervisorConfig& cfg
          st.tool_y_size() + st.part_y_size() == 0;
 }
 
+unsigned wideband_samples_e_takes(const smc::config::SupervisorConfig& cfg) noexcept {
+  const auto& mods = cfg.modules();
+  const auto& st = cfg.milling_model().structure();
+  const bool reads = std::find(mods.begin(), mods.end(), "E") != mods.end() &&
+                     st.tool_y_size() + st.part_y_size() > 0;
+  return reads ? std::max(1U, cfg.operation().wideband_samples_per_tick()) : 0U;
+}
+
 void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noexcept {
   const Parameters loop_rate;  // the defaults: the set chosen at 2 kHz
   // Only the rules that differ between the two sets; the others keep the

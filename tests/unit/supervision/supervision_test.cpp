@@ -149,6 +149,20 @@ TEST(Parameters, ModuleEWithoutAStructureInYIsTold) {
       << "the paper's SMC I runs no E";
 }
 
+// The wideband samples a period E takes from the drive: what the drives are
+// checked against before anything moves; none where E does not read the
+// channel.
+TEST(Parameters, TheWidebandSamplesETakesAreTold) {
+  auto cfg = shipped("smc2.textproto");
+  EXPECT_EQ(sv::wideband_samples_e_takes(cfg), 5u);
+  cfg.mutable_operation()->set_wideband_samples_per_tick(0);
+  EXPECT_EQ(sv::wideband_samples_e_takes(cfg), 1u) << "0 means one a period";
+  EXPECT_EQ(sv::wideband_samples_e_takes(shipped("smc1.textproto")), 0u) << "no E";
+  cfg.mutable_milling_model()->mutable_structure()->clear_tool_y();
+  cfg.mutable_milling_model()->mutable_structure()->clear_part_y();
+  EXPECT_EQ(sv::wideband_samples_e_takes(cfg), 0u) << "E judging S alone reads no channel";
+}
+
 // Module E's rules follow the wideband channel's rate: at the loop's 2 kHz
 // (and up to just under 10 kHz) the set chosen there, the parameters'
 // defaults; from 10 kHz (five samples of 0.5 ms, as shipped, or four of 0.4

@@ -20,6 +20,7 @@
 #include "cnc_control.hpp"
 #include "hal_stream.hpp"
 #include "smc/supervision/gcode.hpp"
+#include "smc/supervision/parameters.hpp"
 #include "smc_config.pb.h"
 
 namespace smc::edge {
@@ -155,6 +156,34 @@ struct LinuxCncDrive::Impl {
     return path;
   }
 
+  // Module E's wideband channel, before anything moves: the dynamometer
+  // must bring the samples a period E was told
+  // (operation.wideband_samples_per_tick), or E fails at the first sample
+  // in contact and the feed is held mid-cut. Read on a fresh servo record
+  // (up to 200 ms); none, or no wideband channel on the sensor, leaves it
+  // to the loop (the stale-record fault; E judging without the channel).
+  void check_wideband_channel() {
+    using namespace std::chrono_literals;
+    const unsigned takes = supervision::wideband_samples_e_takes(config);
+    if (takes == 0) return;
+    linuxcnc::HalRecord r;
+    bool got = false;
+    for (int i = 0; i < 200 && !(got = stream->read(r)); ++i) std::this_thread::sleep_for(1ms);
+    if (!got || !r.fy_wide_present) return;
+    ++drained;  // before the job's first tick: not the job's
+    const unsigned brings = static_cast<unsigned>(std::max<std::int32_t>(1, r.fy_wide_samples));
+    if (brings == takes) return;
+    throw std::runtime_error(
+        "LinuxCNC's dynamometer gives module E's wideband channel " + std::to_string(brings) +
+        " samples a period (smc-force-y-wide-samples), but the configuration says " +
+        std::to_string(takes) +
+        " (operation.wideband_samples_per_tick), and E would hold the feed at the first "
+        "sample in contact; nothing was moved. Fix: give the machine's catalog record its "
+        "sensor's channel (wideband { samples_per_tick: " +
+        std::to_string(brings) + " ... }), or start the dynamometer at " + std::to_string(takes) +
+        " (simulation.f_y_wide_samples_per_tick of run.sh start --dyno CONFIG)");
+  }
+
   void control_loop();
   // The control thread's part of retract(): standstill, abort, a rapid to
   // the safe Z in MDI, and wait until the move stopped there.
@@ -228,6 +257,7 @@ void LinuxCncDrive::load(const FixedProgram& program) {
   // Records from before this job are not this job's.
   linuxcnc::HalRecord skip;
   while (d.stream->read(skip)) ++d.drained;
+  d.check_wideband_channel();
   d.last_record_ns = now_ns();
   spdlog::info("{}: LinuxCNC opened {} ({} passes); axes at most {:.1f} mm/s", d.opt.machine_id,
                path, program.count, d.axis_max_mm_s);

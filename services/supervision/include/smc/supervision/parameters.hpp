@@ -218,6 +218,14 @@ void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noex
 // its machine's structure at dispatch; the edge warns of one it accepts.
 bool chatter_detector_without_structure(const smc::config::SupervisorConfig& cfg) noexcept;
 
+// The wideband F_y samples a period module E takes from the drive under
+// `cfg` (operation.wideband_samples_per_tick, 0 meaning 1), or 0 where E
+// does not read the channel (E not run, or run with no structure in y). A
+// drive that brings another count makes E fail, so the simulated mill's
+// configuration and LinuxCNC's dynamometer are checked against it before
+// anything moves.
+unsigned wideband_samples_e_takes(const smc::config::SupervisorConfig& cfg) noexcept;
+
 // Reads and checks every field the modules use, collecting every problem in
 // `problems` (field paths under "supervisor_config."). The result is only
 // meaningful when no problem was added.
