@@ -648,6 +648,18 @@ TEST_F(Cell, PartShowGivesItsModelsTheChoiceAndWhy) {
   EXPECT_NE(out.find("F_Y = 0.760 kN d^0.650 f^0.630"), std::string::npos) << out;
   EXPECT_NE(out.find("a job now: SMC I on mill-2"), std::string::npos)
       << "mill-1's structural model is suspect: " << out;
+  // What E would get in a job-shop job of the housing on each machine, and
+  // what a tap test would give it: the demo's structures are the handbook's.
+  const std::string js = output_of({bin("smc-cell"), "part", "show", "housing-js", "--db", db_});
+  EXPECT_NE(js.find("module E, where the plan brings no structure\n   on mill-1: the structure of "
+                    "model bracket-tl.mill-1.milling (handbook, suspect), the part's modes being "
+                    "part bracket-tl's; a tap test of this machine (`smc-cell model fit-frf`) "
+                    "gives E its own"),
+            std::string::npos)
+      << js;
+  EXPECT_NE(js.find("   on mill-2: the structure of model bracket-tl.mill-2.milling (handbook)"),
+            std::string::npos)
+      << js;
   EXPECT_EQ(run_cmd({bin("smc-cell"), "part", "show", "no-such-part", "--db", db_}), 2);
 }
 

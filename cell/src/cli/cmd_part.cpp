@@ -71,6 +71,46 @@ void print_model(store::Store& db, const store::ProcessModel& m) {
   }
 }
 
+// What module E gets on each machine for a job of the part that brings no
+// structure of its own (SMC II, SMC II+; cell/README.md, "Module E's
+// structure"), and what would make it better: a structure that is the
+// machine's own from a tap test, and the machine's wideband channel.
+void print_module_e(store::Store& db, const store::Job& job) {
+  std::printf("  module E, where the plan brings no structure\n");
+  for (const auto& m : db.machines()) {
+    if (m.retired_at_ms != 0) continue;
+    const auto s = smc::cell::structure_model(db, job, m.id);
+    std::string line;
+    if (!s) {
+      line = "no structure of " + m.id + " with tool " + job.spec.tool_id() +
+             ": E judges the force spectrum alone; a tap test (`smc-cell model fit-frf`) "
+             "gives it the vibration estimate";
+    } else {
+      const bool measured =
+          s->provenance == cfg::PROVENANCE_IDENTIFIED || s->provenance == cfg::PROVENANCE_FITTED;
+      line = "the structure of model " + s->id + " (" +
+             std::string(store::provenance_name(s->provenance)) +
+             (s->suspect_reason.empty() ? "" : ", suspect") + ")";
+      if (!s->part_id.empty() && s->part_id != job.spec.part_id()) {
+        line += ", the part's modes being part " + s->part_id + "'s";
+      }
+      if (!measured) {
+        line +=
+            "; a tap test of this machine (`smc-cell model fit-frf`) gives E its own (on the "
+            "mismatched mill a handbook structure read q 9-16 % low: edge/CHATTER.md, \"The "
+            "structure E is given\")";
+      }
+    }
+    if (!m.wideband.is_default()) {
+      char ch[96];
+      std::snprintf(ch, sizeof ch, "; its wideband channel %u kHz, order-%u filter at %g Hz",
+                    2 * m.wideband.samples_per_tick, m.wideband.filter_order, m.wideband.cutoff_hz);
+      line += ch;
+    }
+    std::printf("   on %s: %s\n", m.id.c_str(), line.c_str());
+  }
+}
+
 // The stability evidence of a part's cuts, per machine, tool and speed: the
 // deepest chatter-free cut and the shallowest chatter bound the limit; where
 // the machine has a milling model for the part, its time-domain critical
@@ -202,7 +242,9 @@ SMC_CELL_COMMAND(part, 24) {
       "show",
       "One part: its programmed cut, the models for it on each machine (provenance, validation,\n"
       "suspicion, fit), the stability evidence of its cuts (and each milling model checked\n"
-      "against it), what a job of it would get now and why, its jobs and its history");
+      "against it), what a job of it would get now and why, the structure and channel module E\n"
+      "gets on each machine (and where a tap test would give it better), its jobs and its\n"
+      "history");
   show->add_option("ID", a->id, "Part id")->required();
   show->add_option("--plot", a->plot,
                    "Also plot its runs (cycle time, overshoot, chatter events; the change\n"
@@ -245,6 +287,7 @@ SMC_CELL_COMMAND(part, 24) {
                   std::string(store::variant_name(sel.variant)).c_str(),
                   sel.variant == cfg::SMC_I ? (" on " + in.machine.id).c_str() : "",
                   sel.explanation.c_str());
+      print_module_e(db, job);
     }
     print_evidence(db, *p);
     const auto runs = runs_of(db, *p);
