@@ -514,7 +514,7 @@ TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
     // and a tap test gave it the paper's structure (not validated: no SMC I).
     f << "machines { id: \"mill-3\" name: \"third mill\" max_spindle_power_w: 745.7 "
          "max_feedrate_mm_s: 36 max_spindle_rpm: 3000 wideband { samples_per_tick: 1 "
-         "cutoff_hz: 500 filter_order: 4 noise_rms_n: 2 } }\n"
+         "cutoff_hz: 500 filter_order: 2 noise_rms_n: 2 } }\n"
          "models { id: \"mill-3.tap\" machine_id: \"mill-3\" tool_id: \"fm-r25-4t\" "
          "material_id: \"6061-T6\" milling_file: \""
       << src("cell/models/paper_face_mill.textproto") << "\" provenance: PROVENANCE_IDENTIFIED }\n";
@@ -540,7 +540,7 @@ TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
       {bin("smc-cell"), "--log-level", "off", "job", "show", id, "--config", "--db", db_});
   EXPECT_NE(sent.find("wideband_samples_per_tick: 1\n"), std::string::npos) << sent;
   EXPECT_NE(sent.find("f_y_wide_samples_per_tick: 1\n"), std::string::npos) << sent;
-  EXPECT_NE(sent.find("wideband channel: 2 kHz through an order-4 filter at 500 Hz"),
+  EXPECT_NE(sent.find("wideband channel: 2 kHz through an order-2 filter at 500 Hz"),
             std::string::npos)
       << sent;
   EXPECT_NE(sent.find("structure from model mill-3.tap"), std::string::npos) << sent;
@@ -550,7 +550,7 @@ TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
   EXPECT_NE(planned.find("module E's structure, given at dispatch: mill-3: model mill-3.tap;\n"),
             std::string::npos)
       << planned;
-  EXPECT_NE(planned.find("module E's channel on mill-3, from its record: 2 kHz, order-4 filter "
+  EXPECT_NE(planned.find("module E's channel on mill-3, from its record: 2 kHz, order-2 filter "
                          "at 500 Hz"),
             std::string::npos)
       << planned;

@@ -613,7 +613,8 @@ void use_the_machines_channel(smc::config::SupervisorConfig& c, const store::Mac
       << rate_hz / 1000 << " kHz through an order-" << w.filter_order << " filter at "
       << w.cutoff_hz << " Hz"
       << (rate_hz < smc::supervision::kFineChannelRateHz * (1 - 1e-9)
-              ? ", with the rules chosen at 2 kHz"
+              ? ", with the rules chosen at 2 kHz (which catch fewer onsets within 3 "
+                "revolutions than the 10 kHz channel's: cell/README.md)"
               : "")
       << ".";
   c.set_explanation(c.explanation() + why.str());
