@@ -554,6 +554,11 @@ TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
                          "at 500 Hz"),
             std::string::npos)
       << planned;
+  const std::string listed =
+      output_of({bin("smc-cell"), "--log-level", "off", "catalog", "list", "machine", "--db", db_});
+  EXPECT_NE(listed.find("third mill  [wideband 2 kHz, order-2 filter at 500 Hz]"),
+            std::string::npos)
+      << listed;
   // Dashboards see the catalog with the new machine (smc_catalog, transient-local).
   smc::transport::Participant p({.partition = partition_});
   smc::wire::DocumentSubscriber<cfg::CatalogView> catalogs(p);

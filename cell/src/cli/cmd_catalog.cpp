@@ -168,14 +168,12 @@ SMC_CELL_COMMAND(catalog, 22) {
       for (const auto& m : s.machines()) {
         if (m.retired_at_ms != 0 && !l->retired) continue;
         // Its wideband channel (module E's) where the record gives one.
-        char channel[96] = "";
-        if (!m.wideband.is_default()) {
-          std::snprintf(channel, sizeof channel, "  [wideband channel %u kHz, filter at %g Hz]",
-                        m.wideband.samples_per_tick * 2, m.wideband.cutoff_hz);
-        }
+        const std::string channel = m.wideband.is_default()
+                                        ? std::string()
+                                        : "  [wideband " + store::channel_text(m.wideband) + "]";
         std::printf("machine  %-16s %7.1f W %6.1f mm/s %5.0f-%-5.0f rpm %-9s %s%s%s\n",
                     m.id.c_str(), m.max_spindle_power_w, m.max_feedrate_mm_s, m.min_spindle_rpm,
-                    m.max_spindle_rpm, m.drive.c_str(), m.name.c_str(), channel,
+                    m.max_spindle_rpm, m.drive.c_str(), m.name.c_str(), channel.c_str(),
                     mark(m.retired_at_ms));
       }
     }

@@ -101,12 +101,8 @@ void print_module_e(store::Store& db, const store::Job& job) {
             "structure E is given\")";
       }
     }
-    if (!m.wideband.is_default()) {
-      char ch[96];
-      std::snprintf(ch, sizeof ch, "; its wideband channel %u kHz, order-%u filter at %g Hz",
-                    2 * m.wideband.samples_per_tick, m.wideband.filter_order, m.wideband.cutoff_hz);
-      line += ch;
-    }
+    if (!m.wideband.is_default())
+      line += "; its wideband channel " + store::channel_text(m.wideband);
     std::printf("   on %s: %s\n", m.id.c_str(), line.c_str());
   }
 }

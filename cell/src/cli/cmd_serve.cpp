@@ -158,9 +158,8 @@ SMC_CELL_COMMAND(plan, 11) {
     // (cell/README.md, "The machine's wideband channel").
     for (const auto& m : machines) {
       if (m.wideband.is_default()) continue;
-      std::printf("\nmodule E's channel on %s, from its record: %u kHz, order-%u filter at %g Hz",
-                  m.id.c_str(), 2 * m.wideband.samples_per_tick, m.wideband.filter_order,
-                  m.wideband.cutoff_hz);
+      std::printf("\nmodule E's channel on %s, from its record: %s", m.id.c_str(),
+                  smc::cell::store::channel_text(m.wideband).c_str());
     }
     std::printf("\nplanned in %.2f s\n", plan.planning_s);
     if (!out->empty()) {

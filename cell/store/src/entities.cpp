@@ -97,4 +97,12 @@ std::string format_time(std::int64_t time_ms) {
   return std::string(buf.data(), n) + ms.data();
 }
 
+std::string channel_text(const WidebandChannel& w) {
+  if (w.is_default()) return {};
+  char b[96];
+  std::snprintf(b, sizeof b, "%u kHz, order-%u filter at %g Hz", 2 * w.samples_per_tick,
+                w.filter_order, w.cutoff_hz);
+  return b;
+}
+
 }  // namespace smc::cell::store

@@ -209,6 +209,9 @@ std::optional<smc::config::JobState> parse_state(std::string_view text);
 std::string_view kind_name(ModelKind k) noexcept;                      // "force-process", "milling"
 std::string_view provenance_name(smc::config::Provenance p) noexcept;  // "identified", ...
 std::string_view variant_name(smc::config::SmcVariant v) noexcept;     // "SMC I", ...
+// A machine's own wideband channel: "2 kHz, order-2 filter at 500 Hz" (the
+// edge's 0.5 ms period); "" for the cell's default.
+std::string channel_text(const WidebandChannel& w);
 
 // "2024-05-01T12:00:00.123Z"
 std::string format_time(std::int64_t time_ms);
