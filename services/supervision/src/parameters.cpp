@@ -326,19 +326,28 @@ double vibration_channel_rate_hz(const Parameters& p) noexcept {
   return p.sample_period_s > 0 ? p.vibration_samples_per_tick / p.sample_period_s : 0;
 }
 
-bool chatter_detector_without_structure(const smc::config::SupervisorConfig& cfg) noexcept {
+namespace {
+
+bool runs_chatter_detector(const smc::config::SupervisorConfig& cfg) noexcept {
   const auto& mods = cfg.modules();
+  return std::find(mods.begin(), mods.end(), "E") != mods.end();
+}
+
+bool has_structure_in_y(const smc::config::SupervisorConfig& cfg) noexcept {
   const auto& st = cfg.milling_model().structure();
-  return std::find(mods.begin(), mods.end(), "E") != mods.end() &&
-         st.tool_y_size() + st.part_y_size() == 0;
+  return st.tool_y_size() + st.part_y_size() > 0;
+}
+
+}  // namespace
+
+bool chatter_detector_without_structure(const smc::config::SupervisorConfig& cfg) noexcept {
+  return runs_chatter_detector(cfg) && !has_structure_in_y(cfg);
 }
 
 unsigned wideband_samples_e_takes(const smc::config::SupervisorConfig& cfg) noexcept {
-  const auto& mods = cfg.modules();
-  const auto& st = cfg.milling_model().structure();
-  const bool reads = std::find(mods.begin(), mods.end(), "E") != mods.end() &&
-                     st.tool_y_size() + st.part_y_size() > 0;
-  return reads ? std::max(1U, cfg.operation().wideband_samples_per_tick()) : 0U;
+  return runs_chatter_detector(cfg) && has_structure_in_y(cfg)
+             ? std::max(1U, cfg.operation().wideband_samples_per_tick())
+             : 0U;
 }
 
 void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noexcept {
