@@ -605,6 +605,7 @@ void use_the_machines_channel(smc::config::SupervisorConfig& c, const store::Mac
   sim->set_f_y_wide_samples_per_tick(w.samples_per_tick);
   sim->set_f_y_wide_cutoff_hz(w.cutoff_hz);
   sim->set_f_y_wide_order(w.filter_order);
+  sim->set_f_y_wide_noise_rms_n(w.noise_rms_n);
   const double period =
       c.operation().sample_period_s() > 0 ? c.operation().sample_period_s() : 5e-4;
   const double rate_hz = w.samples_per_tick / period;

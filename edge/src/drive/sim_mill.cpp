@@ -164,7 +164,15 @@ SimulatedMill::SimulatedMill(const smc::config::MillingModel& model,
           "f_y_wide_cutoff_hz) must be finite and >= 0; fix: e.g. 250, 1000, 500");
     }
   }
-  if (sim.noise_rms_n() < 0) throw ConfigError("simulation.noise_rms_n: must be >= 0");
+  if (!(sim.noise_rms_n() >= 0) || !std::isfinite(sim.noise_rms_n())) {
+    throw ConfigError("simulation.noise_rms_n: must be finite and >= 0; fix: e.g. 2");
+  }
+  if (sim.has_f_y_wide_noise_rms_n() &&
+      (!(sim.f_y_wide_noise_rms_n() >= 0) || !std::isfinite(sim.f_y_wide_noise_rms_n()))) {
+    throw ConfigError(
+        "simulation.f_y_wide_noise_rms_n: must be finite and >= 0; fix: leave it out for "
+        "noise_rms_n's, or give the channel's own, e.g. 2");
+  }
   if (const auto order = sim.f_y_wide_order(); !machining::AntiAliasLowPass::is_order(order)) {
     throw ConfigError("simulation.f_y_wide_order: must be even, 2-8 (got " + std::to_string(order) +
                       "); fix: 0 or 2 for the shipped channel, e.g. 8");
@@ -355,7 +363,11 @@ Status SimulatedMill::step(double feedrate_cmd_mm_s, DriveSample& out) noexcept 
     fx += sigma * s.noise(s.rng);
     fy += sigma * s.noise(s.rng);
     fz += sigma * s.noise(s.rng);
-    for (int i = 0; i < wide_n; ++i) wide[i] += sigma * s.noise_wide(s.rng_wide);
+  }
+  const double sigma_wide =
+      s.options.has_f_y_wide_noise_rms_n() ? s.options.f_y_wide_noise_rms_n() : sigma;
+  if (sigma_wide > 0) {
+    for (int i = 0; i < wide_n; ++i) wide[i] += sigma_wide * s.noise_wide(s.rng_wide);
   }
   const double x = s.sim.tool_position_mm();
   out.force = ForceSample{s.time_s, fx, fy, fz, wide[wide_n - 1]};

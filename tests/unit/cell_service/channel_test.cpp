@@ -126,6 +126,8 @@ TEST_F(MachineChannel, TheMachinesRecordSetsTheChannelItsConfigurationsCarry) {
   EXPECT_EQ(own.simulation().f_y_wide_samples_per_tick(), 1u) << "a simulated mill samples so";
   EXPECT_DOUBLE_EQ(own.simulation().f_y_wide_cutoff_hz(), 500);
   EXPECT_EQ(own.simulation().f_y_wide_order(), 2u);
+  ASSERT_TRUE(own.simulation().has_f_y_wide_noise_rms_n());
+  EXPECT_DOUBLE_EQ(own.simulation().f_y_wide_noise_rms_n(), 2) << "and with the record's noise";
   EXPECT_NE(
       own.explanation().find("Module E reads mill-3's wideband channel: 2 kHz through an "
                              "order-2 filter at 500 Hz, with the rules chosen at 2 kHz (which "
@@ -147,6 +149,7 @@ TEST_F(MachineChannel, TheMachinesRecordSetsTheChannelItsConfigurationsCarry) {
   EXPECT_DOUBLE_EQ(plain.operation().wideband_cutoff_hz(),
                    defaults_.operation().wideband_cutoff_hz());
   EXPECT_EQ(plain.explanation().find("wideband channel"), std::string::npos);
+  EXPECT_FALSE(plain.simulation().has_f_y_wide_noise_rms_n()) << "the mill's noise_rms_n";
   EXPECT_NE(sv::parameters_from_config(plain).chatter_vibration_rise,
             loop_rate.chatter_vibration_rise)
       << "the 10 kHz rules";

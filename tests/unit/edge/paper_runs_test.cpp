@@ -9,6 +9,7 @@
 #include <cmath>
 #include <functional>
 #include <optional>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "edge_test_config.hpp"
@@ -704,6 +705,73 @@ TEST(SimulatedDynamometer, AFasterWidebandChannelBringsItsSamplesEvenlySpaced) {
     EXPECT_NE(std::string(e.what()).find("simulation.f_y_wide_samples_per_tick"), std::string::npos)
         << e.what();
     EXPECT_NE(std::string(e.what()).find("fix:"), std::string::npos) << e.what();
+  }
+}
+
+// The wideband channel's own noise (simulation.f_y_wide_noise_rms_n), as a
+// machine's catalog record gives it: in air, before the cutter meets the
+// part, the channel reads its noise alone, 5 N rms where the record says 5
+// and none where it says 0, while the other channels keep noise_rms_n's 2 N
+// sample for sample. Left out, the channel takes noise_rms_n's. A negative
+// or NaN value is refused naming the field.
+TEST(SimulatedDynamometer, TheWidebandChannelsNoiseIsItsOwnWhereGiven) {
+  auto raw = test::shipped_config("smc2.textproto");
+  const double dt = raw.operation().sample_period_s();
+  ASSERT_DOUBLE_EQ(raw.simulation().noise_rms_n(), 2);
+  ASSERT_FALSE(raw.simulation().has_f_y_wide_noise_rms_n());
+  const EdgeConfig cfg = edge_config_from_proto(raw);
+  struct Channel {
+    double rms_wide = 0;  // the wideband channel in air
+    double rms_y = 0;     // F_y in air
+    std::vector<double> f_y;
+  };
+  const auto in_air = [&](const smc::config::SimulatedMill& sim) {
+    SimulatedMill mill(raw.milling_model(), sim, dt);
+    mill.load(cfg.program);
+    Channel c;
+    DriveSample s;
+    double sum_wide = 0, sum_y = 0;
+    int n_wide = 0, n_y = 0;
+    for (int i = 0; i < 4000; ++i) {
+      EXPECT_EQ(mill.step(5, s), Status::kOk);
+      if (s.engagement > 0) break;
+      const int k = s.force.wide_count > 0 ? s.force.wide_count : 1;
+      for (int j = 0; j < k; ++j) {
+        const double w = s.force.wide_count > 0 ? s.force.f_y_wide_sub_n[j] : s.force.f_y_wide_n;
+        sum_wide += w * w;
+        ++n_wide;
+      }
+      sum_y += s.force.f_y_n * s.force.f_y_n;
+      ++n_y;
+      c.f_y.push_back(s.force.f_y_n);
+    }
+    EXPECT_GT(n_y, 500) << "the approach in air is long enough to measure";
+    c.rms_wide = std::sqrt(sum_wide / std::max(1, n_wide));
+    c.rms_y = std::sqrt(sum_y / std::max(1, n_y));
+    return c;
+  };
+  const Channel shared = in_air(raw.simulation());
+  auto own = raw.simulation();
+  own.set_f_y_wide_noise_rms_n(5);
+  const Channel five = in_air(own);
+  own.set_f_y_wide_noise_rms_n(0);
+  const Channel none = in_air(own);
+  EXPECT_NEAR(shared.rms_wide, 2, 0.15) << "left out: noise_rms_n's";
+  EXPECT_NEAR(five.rms_wide, 5, 0.35);
+  EXPECT_EQ(none.rms_wide, 0) << "no noise, and no force in air";
+  EXPECT_NEAR(shared.rms_y, 2, 0.2);
+  EXPECT_EQ(five.f_y, shared.f_y) << "the other channels' noise is as it was";
+  EXPECT_EQ(none.f_y, shared.f_y);
+  for (const double bad : {-1.0, std::nan("")}) {
+    own.set_f_y_wide_noise_rms_n(bad);
+    try {
+      SimulatedMill mill(raw.milling_model(), own, dt);
+      ADD_FAILURE() << "noise " << bad << " was accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("simulation.f_y_wide_noise_rms_n"), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("fix:"), std::string::npos) << e.what();
+    }
   }
 }
 
