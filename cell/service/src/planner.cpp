@@ -655,6 +655,12 @@ smc::config::SupervisorConfig Planner::for_machine(const smc::config::Supervisor
         {.title = "configuration " + config_id + " for " + machine.id + ", part " +
                   c.program().part_id() + ", " + std::string(store::variant_name(c.variant()))}));
   }
+  // A channel that hides the chatter of the structure E now has
+  // (edge/CHATTER.md, "What the channel's filter costs E"); the whole
+  // configuration, machine limits included, is read for it.
+  if (const auto w = smc::supervision::wideband_channel_warning(c); !w.empty()) {
+    c.set_explanation(c.explanation() + " Warning on " + machine.id + ": " + w + ".");
+  }
   return c;
 }
 

@@ -161,6 +161,16 @@ SMC_CELL_COMMAND(plan, 11) {
       std::printf("\nmodule E's channel on %s, from its record: %s", m.id.c_str(),
                   smc::cell::store::channel_text(m.wideband).c_str());
     }
+    // What the configuration each machine would get warns of (its channel
+    // against the structure E then has).
+    for (const auto& m : machines) {
+      const auto model = smc::cell::structure_model(db, job, m.id);
+      const auto sent =
+          smc::cell::Planner::for_machine(plan.config, m, "(plan)", model ? &*model : nullptr);
+      if (const auto w = smc::supervision::wideband_channel_warning(sent); !w.empty()) {
+        std::printf("\nwarning on %s: %s", m.id.c_str(), w.c_str());
+      }
+    }
     std::printf("\nplanned in %.2f s\n", plan.planning_s);
     if (!out->empty()) {
       std::FILE* f = std::fopen(out->c_str(), "w");

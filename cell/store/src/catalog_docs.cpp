@@ -252,17 +252,19 @@ void check_wideband(common::Diagnostics& problems, const std::string& where,
   }
   const double nyquist = n * 1000.0;
   if (!(std::isfinite(c.cutoff_hz()) && c.cutoff_hz() > 0 && c.cutoff_hz() < nyquist)) {
-    problems.add(where + ".cutoff_hz",
-                 "must be > 0 and below the channel's Nyquist frequency (" + num(nyquist) +
-                     " Hz), got " + num(c.cutoff_hz()),
-                 "give the anti-alias filter's cut-off (measured: 500 Hz at 2 kHz, 3500 Hz at "
-                 "10 kHz)");
+    problems.add(
+        where + ".cutoff_hz",
+        "must be > 0 and below the channel's Nyquist frequency (" + num(nyquist) + " Hz), got " +
+            num(c.cutoff_hz()),
+        "give the anti-alias filter's cut-off (E was measured through 350-700 Hz at 2 kHz, "
+        "1000-1400 Hz at 4 kHz, 3500 Hz at 10 kHz; edge/CHATTER.md, \"What the "
+        "channel's filter costs E\")");
   }
   if (c.filter_order() % 2 != 0 || c.filter_order() > 8) {
     problems.add(where + ".filter_order",
                  "must be even, 2-8, got " + std::to_string(c.filter_order()),
-                 "give the anti-alias filter's Butterworth order (measured: 2 at 2 kHz, 8 at "
-                 "10 kHz)");
+                 "give the anti-alias filter's Butterworth order (E was measured through 2-8 at "
+                 "2 and 4 kHz, 8 at 10 kHz)");
   }
   if (!(std::isfinite(c.noise_rms_n()) && c.noise_rms_n() >= 0 && c.noise_rms_n() <= 1000)) {
     problems.add(where + ".noise_rms_n", "must be 0-1000 N rms, got " + num(c.noise_rms_n()),

@@ -167,6 +167,9 @@ void EdgeService::Impl::apply_checked_configs() {
           "give it the machine's structure (a tap test) for its vibration estimate",
           opt.machine_id, cfg.config_id());
     }
+    if (const auto w = smc::supervision::wideband_channel_warning(cfg); !w.empty()) {
+      spdlog::warn("{}: configuration '{}': {}", opt.machine_id, cfg.config_id(), w);
+    }
     if (job) {
       pending = cfg;
       spdlog::info("{}: configuration '{}' accepted; in force after job {}", opt.machine_id,

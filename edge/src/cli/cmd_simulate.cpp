@@ -189,6 +189,9 @@ void add_simulate(CLI::App& app) {
                    "alone; give it the machine's structure for its vibration estimate\n",
                    args->config.c_str());
     }
+    if (const auto w = smc::supervision::wideband_channel_warning(raw); !w.empty()) {
+      std::fprintf(stderr, "smc-edge: %s: warning: %s\n", args->config.c_str(), w.c_str());
+    }
     if (args->drive != "linuxcnc" && args->replay.empty()) {
       try {
         check_wideband_channel_agrees(raw);  // the configuration as given, before the plant's

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <numbers>
 #include <sstream>
 
@@ -348,6 +349,55 @@ unsigned wideband_samples_e_takes(const smc::config::SupervisorConfig& cfg) noex
   return runs_chatter_detector(cfg) && has_structure_in_y(cfg)
              ? std::max(1U, cfg.operation().wideband_samples_per_tick())
              : 0U;
+}
+
+WidebandModeLoss wideband_mode_loss(const Parameters& p) noexcept {
+  WidebandModeLoss worst;
+  worst.nyquist_hz = vibration_channel_rate_hz(p) / 2;
+  const double fc = p.vibration_sensor_cutoff_hz;
+  for (int i = 0; i < p.vibration_mode_count; ++i) {
+    WidebandModeLoss m;
+    m.nyquist_hz = worst.nyquist_hz;
+    m.mode_hz = p.vibration_modes[i].natural_frequency_rad_s / (2 * std::numbers::pi);
+    m.above_nyquist = m.mode_hz >= m.nyquist_hz;
+    m.loss_db = 10 * std::log10(1 + std::pow(m.mode_hz / fc, 2 * p.vibration_sensor_order));
+    const bool worse =
+        m.above_nyquist != worst.above_nyquist ? m.above_nyquist : m.loss_db > worst.loss_db;
+    if (i == 0 || worse) worst = m;
+  }
+  return worst;
+}
+
+std::string wideband_channel_warning(const smc::config::SupervisorConfig& cfg) {
+  if (wideband_samples_e_takes(cfg) == 0) return {};
+  common::Diagnostics problems;
+  const Parameters p = read_parameters(cfg, problems);
+  if (!problems.empty()) return {};
+  const auto loss = wideband_mode_loss(p);
+  std::ostringstream w;
+  w << "module E's wideband channel (" << std::setprecision(3)
+    << vibration_channel_rate_hz(p) / 1000 << " kHz through an order-" << p.vibration_sensor_order
+    << " filter at " << std::lround(p.vibration_sensor_cutoff_hz) << " Hz) ";
+  if (loss.above_nyquist) {
+    w << "cannot see the structure's y mode at " << std::lround(loss.mode_hz)
+      << " Hz, above its Nyquist frequency (" << std::lround(loss.nyquist_hz)
+      << " Hz), so E misses chatter there; fix: a channel sampled faster than twice the "
+         "mode (operation.wideband_samples_per_tick; a machine's catalog record, wideband)";
+  } else if (loss.loss_db > kWidebandModeLossWarnDb) {
+    w << "takes the structure's y mode at " << std::lround(loss.mode_hz) << " Hz " << std::fixed
+      << std::setprecision(1) << loss.loss_db
+      << " dB down, and E undoing it lifts the channel's noise as much where that mode "
+         "chatters: measured, such channels catch fewer onsets in time and read noise as "
+         "chatter (edge/CHATTER.md, \"What the channel's filter costs E\"); fix: a sensor "
+         "filter that takes it at most "
+      << std::setprecision(0) << kWidebandModeLossWarnDb
+      << " dB down (a higher cut-off or a lower order), told to E in "
+         "operation.wideband_cutoff_hz and wideband_filter_order (a machine's catalog record, "
+         "wideband)";
+  } else {
+    return {};
+  }
+  return w.str();
 }
 
 void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noexcept {

@@ -135,6 +135,8 @@ TEST_F(MachineChannel, TheMachinesRecordSetsTheChannelItsConfigurationsCarry) {
                              "channel's: cell/README.md)."),
       std::string::npos)
       << own.explanation();
+  EXPECT_EQ(own.explanation().find("Warning"), std::string::npos)
+      << "a second order at 500 Hz takes the tool's mode 5.9 dB down: " << own.explanation();
   const auto p = sv::parameters_from_config(own);
   EXPECT_EQ(p.vibration_samples_per_tick, 1);
   EXPECT_EQ(p.vibration_mode_count, 2) << "E estimates the vibration, not S alone";
@@ -153,6 +155,27 @@ TEST_F(MachineChannel, TheMachinesRecordSetsTheChannelItsConfigurationsCarry) {
   EXPECT_NE(sv::parameters_from_config(plain).chatter_vibration_rise,
             loop_rate.chatter_vibration_rise)
       << "the 10 kHz rules";
+}
+
+// A record whose filter takes the tool's mode further down than E was
+// measured to bear (a fourth order at 500 Hz: 9.7 dB at 652.5 Hz) is
+// accepted, as the sensor is what it is, and every configuration sent to
+// the machine says so in its explanation, with the fix.
+TEST_F(MachineChannel, AChannelThatHidesTheToolsChatterIsCalledOutInThePlan) {
+  store::Machine m = *db_->machine("mill-3");
+  m.wideband.filter_order = 4;
+  db_->put_machine(m);
+  const auto sent = sent_to("mill-3");
+  EXPECT_EQ(sent.operation().wideband_filter_order(), 4u);
+  EXPECT_NE(sent.explanation().find(
+                " Warning on mill-3: module E's wideband channel (2 kHz through an order-4 "
+                "filter at 500 Hz) takes the structure's y mode at 653 Hz 9.7 dB down"),
+            std::string::npos)
+      << sent.explanation();
+  EXPECT_NE(sent.explanation().find("fix: a sensor filter that takes it at most 8 dB down"),
+            std::string::npos);
+  EXPECT_EQ(sent_to("mill-1").explanation().find("Warning"), std::string::npos)
+      << "the cell's default channel";
 }
 
 // The housing chatters at its programmed depth (the demo's job-shop job).

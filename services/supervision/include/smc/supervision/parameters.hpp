@@ -226,6 +226,34 @@ bool chatter_detector_without_structure(const smc::config::SupervisorConfig& cfg
 // anything moves.
 unsigned wideband_samples_e_takes(const smc::config::SupervisorConfig& cfg) noexcept;
 
+// Module E's wideband channel against the structure it undoes: the y mode
+// (tool_y, part_y, as E uses them) that the channel's anti-alias filter
+// takes furthest down before E undoes it. Undoing it multiplies the
+// channel's noise by as much where that mode chatters, and on the detector
+// study's grid a filter that took the paper's tool mode (652 Hz) 9.7 dB
+// down caught far fewer onsets in time and gave false detections, where
+// those that took it 6 dB or less did not (edge/CHATTER.md, "What the
+// channel's filter costs E"). A mode above the channel's Nyquist frequency
+// E cannot see at all.
+struct WidebandModeLoss {
+  double mode_hz = 0;          // the mode's natural frequency
+  double loss_db = 0;          // the filter's attenuation there, 10 log10(1 + (f/fc)^2n)
+  double nyquist_hz = 0;       // the channel's
+  bool above_nyquist = false;  // the mode lies above it
+};
+// The worst mode of `p` (vibration_modes, vibration_sensor_*), or a loss of
+// 0 where `p` has no mode.
+WidebandModeLoss wideband_mode_loss(const Parameters& p) noexcept;
+// Above this loss at a mode the channel is called out (above: measured).
+inline constexpr double kWidebandModeLossWarnDb = 8;
+// A sentence for the logs, `smc-edge simulate`'s stderr and the cell's
+// explanation, where E reads the channel under `cfg` (wideband_samples_e_takes
+// > 0) and a y mode is lost beyond kWidebandModeLossWarnDb or above the
+// Nyquist frequency: what is lost, what it costs and the fix. Empty
+// otherwise, and for a configuration that does not read (its own checks
+// report that).
+std::string wideband_channel_warning(const smc::config::SupervisorConfig& cfg);
+
 // Reads and checks every field the modules use, collecting every problem in
 // `problems` (field paths under "supervisor_config."). The result is only
 // meaningful when no problem was added.
