@@ -410,6 +410,12 @@ int main(int argc, char** argv) {
                      std::to_string(shipped.chatter_vibration_flip_revolutions) + " at 10 kHz, " +
                      std::to_string(at_loop.chatter_vibration_flip_revolutions) + " at 2 kHz)")
       ->check(CLI::Range(1, 10));
+  double rules_for_rate = 0;  // 0: the channel's own rate
+  app.add_option("--rules-for-rate", rules_for_rate,
+                 "E's rules are the set chosen for a wideband channel at this rate, Hz (10000: "
+                 "the set chosen at 10 kHz; below it the 2 kHz set), whatever the channel's "
+                 "rate (default: the channel's own); the --vibration-* flags still apply")
+      ->check(smc::bench::kPositive);
   app.add_flag("--vibration-forget-across-steps", forget_across_steps,
                "E's rules forget their last revolutions across one not judged for a step in the "
                "mean F_z (shipped: they keep them at 10 kHz, save across an aborted pass's ledge, "
@@ -509,6 +515,7 @@ int main(int argc, char** argv) {
   // carry the vibration rules).
   auto tune = [&](EdgeParameters& ep) {
     if (force_only) ep.vibration_mode_count = 0;
+    if (rules_for_rate > 0) smc::supervision::set_vibration_rules_for_channel(ep, rules_for_rate);
     for (const Knob& k : knobs) {
       if (k.value >= 0) ep.*k.field = k.value;
     }
