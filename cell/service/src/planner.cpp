@@ -612,7 +612,7 @@ void use_the_machines_channel(smc::config::SupervisorConfig& c, const store::Mac
   std::ostringstream why;
   why << " Module E reads " << machine.id << "'s wideband channel: " << std::setprecision(3)
       << rate_hz / 1000 << " kHz through an order-" << w.filter_order << " filter at "
-      << w.cutoff_hz << " Hz"
+      << std::setprecision(6) << w.cutoff_hz << " Hz"
       << (rate_hz < smc::supervision::kFineChannelRateHz * (1 - 1e-9)
               ? ", with the rules chosen at 2 kHz (which catch fewer onsets within 3 "
                 "revolutions than the 10 kHz channel's: cell/README.md)"

@@ -412,8 +412,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 10));
   double rules_for_rate = 0;  // 0: the channel's own rate
   app.add_option("--rules-for-rate", rules_for_rate,
-                 "E's rules are the set chosen for a wideband channel at this rate, Hz (10000: "
-                 "the set chosen at 10 kHz; below it the 2 kHz set), whatever the channel's "
+                 "E's rules are the set chosen for a wideband channel at this rate, Hz (from "
+                 "4000: the set chosen at 10 kHz; below it the 2 kHz set), whatever the channel's "
                  "rate (default: the channel's own); the --vibration-* flags still apply")
       ->check(smc::bench::kPositive);
   app.add_flag("--vibration-forget-across-steps", forget_across_steps,

@@ -157,6 +157,50 @@ TEST_F(MachineChannel, TheMachinesRecordSetsTheChannelItsConfigurationsCarry) {
       << "the 10 kHz rules";
 }
 
+// A machine whose channel samples at 4 kHz (two samples a period, through
+// an 8th-order filter at 1.4 kHz): E takes the rules chosen at 10 kHz,
+// which did better there than the 2 kHz set (edge/CHATTER.md, "What the
+// channel's filter costs E"), and the housing is caught within 3
+// revolutions on the paper's mill and on the mismatched one.
+TEST_F(MachineChannel, AFourKilohertzChannelTakesTheRulesChosenAtTen) {
+  store::Machine m = *db_->machine("mill-3");
+  m.id = "mill-4";
+  m.wideband = {.samples_per_tick = 2, .cutoff_hz = 1400, .filter_order = 8, .noise_rms_n = 2};
+  db_->put_machine(m);
+  store::ProcessModel s = *db_->model("bracket-tl.mill-3.milling");
+  s.id = "bracket-tl.mill-4.milling";
+  s.machine_id = "mill-4";
+  db_->add_model(s);
+  const auto sent = sent_to("mill-4");
+  EXPECT_NE(sent.explanation().find(
+                "Module E reads mill-4's wideband channel: 4 kHz through an order-8 filter at "
+                "1400 Hz."),
+            std::string::npos)
+      << sent.explanation();
+  EXPECT_EQ(sent.explanation().find("Warning"), std::string::npos);
+  const auto p = sv::parameters_from_config(sent);
+  sv::Parameters ten;
+  sv::set_vibration_rules_for_channel(ten, sv::kFineChannelRateHz);
+  EXPECT_EQ(p.chatter_vibration_rise, ten.chatter_vibration_rise);
+  EXPECT_EQ(p.chatter_vibration_flip_revolutions, ten.chatter_vibration_flip_revolutions);
+  EXPECT_TRUE(p.chatter_vibration_keep_across_steps);
+  for (const char* plant : {kPapersMill, kMismatchedMill}) {
+    const auto c = cut(sent, nullptr, plant);
+    EXPECT_TRUE(c.completed) << plant << ": " << smc::edge::to_string(c.fault);
+    EXPECT_GE(c.summary.chatter_events(), 1u) << plant;
+    ASSERT_GT(c.summary.chatter_onset_s(), 0) << plant;
+    ASSERT_GT(c.summary.chatter_detected_s(), 0) << plant;
+    EXPECT_LE(revolutions_late(c.summary, 1500), 3.0)
+        << plant << ": " << c.summary.ShortDebugString();
+    std::printf(
+        "housing-js on %s through a 4 kHz channel: onset %.4f s detected %.4f s (%.2f "
+        "rev), %u events, %u passes\n",
+        plant, c.summary.chatter_onset_s(), c.summary.chatter_detected_s(),
+        revolutions_late(c.summary, 1500), c.summary.chatter_events(),
+        c.summary.passes_completed());
+  }
+}
+
 // A record whose filter takes the tool's mode further down than E was
 // measured to bear (a fourth order at 500 Hz: 9.7 dB at 652.5 Hz) is
 // accepted, as the sensor is what it is, and every configuration sent to

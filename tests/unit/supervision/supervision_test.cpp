@@ -232,11 +232,11 @@ TEST(Parameters, AWidebandChannelThatHidesAModesChatterIsCalledOut) {
 }
 
 // Module E's rules follow the wideband channel's rate: at the loop's 2 kHz
-// (and up to just under 10 kHz) the set chosen there, the parameters'
-// defaults; from 10 kHz (five samples of 0.5 ms, as shipped, or four of 0.4
-// ms) the set chosen at 10 kHz, rise at the label's 0.15 and three
-// revolutions of a period doubling. The rules that are the same in both sets
-// stay as they are.
+// (and up to just under 4 kHz) the set chosen there, the parameters'
+// defaults; from 4 kHz (two samples of 0.5 ms, or five as shipped, or four
+// of 0.4 ms) the set chosen at 10 kHz, rise at the label's 0.15 and three
+// revolutions of a period doubling, which did better at 4 kHz too. The
+// rules that are the same in both sets stay as they are.
 TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
   const sv::Parameters defaults;
   auto cfg = shipped("smc2.textproto");
@@ -252,8 +252,16 @@ TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
            p.chatter_vibration_flip_revolutions == 3;
   };
   EXPECT_FALSE(fine_rules(loop));
-  cfg.mutable_operation()->set_wideband_samples_per_tick(4);  // 8 kHz
+  cfg.mutable_operation()->set_sample_period_s(0.0004);  // one of 0.4 ms: 2.5 kHz
   EXPECT_FALSE(fine_rules(sv::parameters_from_config(cfg)));
+  cfg.mutable_operation()->set_sample_period_s(0.0005);
+  cfg.mutable_operation()->set_wideband_samples_per_tick(2);  // 4 kHz
+  const auto four = sv::parameters_from_config(cfg);
+  EXPECT_EQ(sv::vibration_channel_rate_hz(four), 4000);
+  EXPECT_TRUE(fine_rules(four));
+  EXPECT_TRUE(four.chatter_vibration_keep_across_steps);
+  cfg.mutable_operation()->set_wideband_samples_per_tick(4);  // 8 kHz
+  EXPECT_TRUE(fine_rules(sv::parameters_from_config(cfg)));
   cfg.mutable_operation()->set_wideband_samples_per_tick(5);  // 10 kHz
   const auto fine = sv::parameters_from_config(cfg);
   EXPECT_EQ(sv::vibration_channel_rate_hz(fine), 10000);
