@@ -42,13 +42,18 @@ class MachineChannel : public ::testing::Test {
     planner_.emplace(src("cell/grafcets"), defaults_);
     // mill-3: the paper's mill with a dynamometer sampled once a period
     // (2 kHz) through a 2nd-order filter at 500 Hz, and mill-1's structure.
+    add_mill("mill-3",
+             {.samples_per_tick = 1, .cutoff_hz = 500, .filter_order = 2, .noise_rms_n = 2});
+  }
+  // Machine `id`: mill-1 with `channel` and mill-1's structure.
+  void add_mill(const std::string& id, const store::WidebandChannel& channel) {
     store::Machine m = *db_->machine("mill-1");
-    m.id = "mill-3";
-    m.wideband = {.samples_per_tick = 1, .cutoff_hz = 500, .filter_order = 2, .noise_rms_n = 2};
+    m.id = id;
+    m.wideband = channel;
     db_->put_machine(m);
     store::ProcessModel s = *db_->model("bracket-tl.mill-1.milling");
-    s.id = "bracket-tl.mill-3.milling";
-    s.machine_id = "mill-3";
+    s.id = "bracket-tl." + id + ".milling";
+    s.machine_id = id;
     db_->add_model(s);
   }
   void TearDown() override {
@@ -163,14 +168,8 @@ TEST_F(MachineChannel, TheMachinesRecordSetsTheChannelItsConfigurationsCarry) {
 // channel's filter costs E"), and the housing is caught within 3
 // revolutions on the paper's mill and on the mismatched one.
 TEST_F(MachineChannel, AFourKilohertzChannelTakesTheRulesChosenAtTen) {
-  store::Machine m = *db_->machine("mill-3");
-  m.id = "mill-4";
-  m.wideband = {.samples_per_tick = 2, .cutoff_hz = 1400, .filter_order = 8, .noise_rms_n = 2};
-  db_->put_machine(m);
-  store::ProcessModel s = *db_->model("bracket-tl.mill-3.milling");
-  s.id = "bracket-tl.mill-4.milling";
-  s.machine_id = "mill-4";
-  db_->add_model(s);
+  add_mill("mill-4",
+           {.samples_per_tick = 2, .cutoff_hz = 1400, .filter_order = 8, .noise_rms_n = 2});
   const auto sent = sent_to("mill-4");
   EXPECT_NE(sent.explanation().find(
                 "Module E reads mill-4's wideband channel: 4 kHz through an order-8 filter at "
