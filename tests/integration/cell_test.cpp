@@ -502,6 +502,53 @@ TEST_F(Cell, ThePartsCutsBoundItsStabilityLimit) {
   EXPECT_GE(ev[1].revolutions, 20u);
 }
 
+// A machine whose wideband channel would hide its tool's chatter from
+// module E (a fourth-order filter at 500 Hz on a 2 kHz channel takes the
+// tool's y mode, 652.5 Hz, 9.7 dB down: edge/CHATTER.md, "What the
+// channel's filter costs E") is accepted with a note naming the model whose
+// structure shows it, in a dry run too; `smc-cell plan` for a job pinned to
+// it warns with the fix. A second order there (5.9 dB) draws no note.
+TEST_F(Cell, CatalogApplyNotesAChannelThatHidesTheToolsChatter) {
+  const auto doc = dir_ / "mills.textproto";
+  {
+    std::ofstream f(doc);
+    for (const auto& [id, order] : {std::pair{"mill-5", 4}, std::pair{"mill-6", 2}}) {
+      f << "machines { id: \"" << id << "\" max_spindle_power_w: 745.7 max_feedrate_mm_s: 36 "
+        << "max_spindle_rpm: 3000 wideband { samples_per_tick: 1 cutoff_hz: 500 filter_order: "
+        << order << " noise_rms_n: 2 } }\n"
+        << "models { id: \"" << id << ".tap\" machine_id: \"" << id
+        << "\" tool_id: \"fm-r25-4t\" material_id: \"6061-T6\" milling_file: \""
+        << src("cell/models/paper_face_mill.textproto")
+        << "\" provenance: PROVENANCE_IDENTIFIED }\n";
+    }
+  }
+  const std::string note =
+      "note: machine mill-5 with the structure of model mill-5.tap: module E's wideband channel "
+      "(2 kHz through an order-4 filter at 500 Hz) takes the structure's y mode at 653 Hz 9.7 dB "
+      "down";
+  const std::vector<std::string> apply{bin("smc-cell"), "--log-level", "warn", "catalog",
+                                       "apply",         doc.string(),  "--db", db_};
+  auto dry = apply;
+  dry.push_back("--dry-run");
+  const std::string checked = output_of(dry);
+  EXPECT_NE(checked.find(note), std::string::npos) << checked;
+  const std::string applied = output_of(apply);
+  EXPECT_NE(applied.find("created  machine mill-5"), std::string::npos) << applied;
+  EXPECT_NE(applied.find(note), std::string::npos) << applied;
+  EXPECT_EQ(applied.find("machine mill-6 with"), std::string::npos) << applied;
+  EXPECT_EQ(output_of(apply).find("created"), std::string::npos) << "applied once";
+  EXPECT_NE(output_of(apply).find(note), std::string::npos) << "the note stands while it holds";
+  const auto pinned = dir_ / "on-mill-5.textproto";
+  std::ofstream(pinned) << "part_id: \"housing-js\"\nmachine_id: \"mill-5\"\n";
+  const std::string plan =
+      output_of({bin("smc-cell"), "--log-level", "off", "plan", pinned.string(), "--db", db_});
+  EXPECT_NE(plan.find("warning on mill-5: module E's wideband channel (2 kHz through an order-4 "
+                      "filter at 500 Hz) takes the structure's y mode at 653 Hz 9.7 dB down"),
+            std::string::npos)
+      << plan;
+  EXPECT_NE(plan.find("fix: a sensor filter that takes it at most 8 dB down"), std::string::npos);
+}
+
 // A machine added to a running cell with `smc-cell catalog apply` takes jobs
 // without a restart of the cell.
 TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {

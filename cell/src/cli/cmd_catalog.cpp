@@ -11,6 +11,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,8 @@
 #include "smc/cell/store/store.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/machining/frf.hpp"
+#include "smc/supervision/parameters.hpp"
+#include "smc_config.pb.h"
 
 namespace {
 
@@ -82,6 +85,42 @@ std::string show_entity(store::Store& s, const std::string& kind, const std::str
   return pick(all.models());
 }
 
+// What module E would make of each machine's own wideband channel with the
+// structures the cell has of that machine (the database's models and the
+// documents' own): a note where the channel's filter hides a y mode's
+// chatter (edge/CHATTER.md, "What the channel's filter costs E"). The
+// record is accepted all the same: the sensor is what it is.
+std::vector<std::string> channel_notes(store::Store& s, const store::CatalogDocuments& docs) {
+  std::vector<std::string> notes;
+  std::set<std::string> seen;
+  for (const auto& f : docs.machines) {
+    const auto& d = f.doc;
+    if (!d.has_wideband() || d.wideband().samples_per_tick() == 0) continue;
+    const auto& w = d.wideband();
+    // The edge samples every 0.5 ms: n samples a period are n x 2 kHz.
+    const double rate_hz = 2000.0 * w.samples_per_tick();
+    const int order = w.filter_order() == 0 ? 2 : static_cast<int>(w.filter_order());
+    std::vector<std::pair<std::string, const smc::config::Structure*>> structures;
+    const auto stored = s.find_models(d.id(), "", "", "");
+    for (const auto& m : stored) {
+      if (m.kind == store::ModelKind::kMilling)
+        structures.emplace_back(m.id, &m.milling.structure());
+    }
+    for (const auto& m : docs.models) {
+      if (m.doc.machine_id() == d.id() && m.doc.has_milling()) {
+        structures.emplace_back(m.doc.id(), &m.doc.milling().structure());
+      }
+    }
+    for (const auto& [id, st] : structures) {
+      const auto text =
+          smc::supervision::wideband_channel_warning(rate_hz, w.cutoff_hz(), order, *st);
+      if (text.empty() || !seen.insert(d.id() + text).second) continue;
+      notes.push_back("machine " + d.id() + " with the structure of model " + id + ": " + text);
+    }
+  }
+  return notes;
+}
+
 }  // namespace
 
 SMC_CELL_COMMAND(catalog, 22) {
@@ -102,7 +141,10 @@ SMC_CELL_COMMAND(catalog, 22) {
       "Check documents (files or folders) against each other and the database and write what\n"
       "they change, in one transaction, each change recorded with author and reason. Prints the\n"
       "changes (created, updated with the fields, unchanged). Idempotent. Refused as a whole,\n"
-      "nothing written, when any document is wrong (file, field and fix are named).");
+      "nothing written, when any document is wrong (file, field and fix are named). A note\n"
+      "follows where a machine's wideband channel would hide a y mode's chatter from module E\n"
+      "(its filter takes the mode more than 8 dB down, or the mode is above its Nyquist\n"
+      "frequency), judged with the structures of that machine's models; the record is kept.");
   apply->add_option("PATH", a->paths, "Catalog files or folders")->required();
   add_db_option(apply, a->db);
   apply->add_flag("--dry-run", a->dry_run, "Check and show the changes; write nothing");
@@ -111,10 +153,13 @@ SMC_CELL_COMMAND(catalog, 22) {
   apply->callback([a] {
     auto s = store::Store::open(a->db, store::OpenMode::kExisting);
     std::vector<store::CatalogChange> changes;
+    std::vector<std::string> notes;
     try {
+      const auto docs = store::load_catalog(a->paths);
       changes = store::apply_catalog(
-          s, store::load_catalog(a->paths),
+          s, docs,
           {.dry_run = a->dry_run, .author = author_or_default(a->author), .reason = a->reason});
+      notes = channel_notes(s, docs);
     } catch (const store::CatalogError& e) {
       throw Failure(2, std::string(e.what()) + "\ncatalog apply: nothing written");
     }
@@ -128,6 +173,7 @@ SMC_CELL_COMMAND(catalog, 22) {
     std::printf("%d change%s%s, %zu unchanged\n", n, n == 1 ? "" : "s",
                 a->dry_run ? " (dry run: nothing written)" : "",
                 changes.size() - static_cast<size_t>(n));
+    for (const auto& note : notes) std::printf("note: %s\n", note.c_str());
   });
 
   struct ExportArgs {

@@ -368,11 +368,10 @@ WidebandModeLoss wideband_mode_loss(const Parameters& p) noexcept {
   return worst;
 }
 
-std::string wideband_channel_warning(const smc::config::SupervisorConfig& cfg) {
-  if (wideband_samples_e_takes(cfg) == 0) return {};
-  common::Diagnostics problems;
-  const Parameters p = read_parameters(cfg, problems);
-  if (!problems.empty()) return {};
+namespace {
+
+// The sentence of wideband_channel_warning for `p`'s channel and modes.
+std::string channel_warning_text(const Parameters& p) {
   const auto loss = wideband_mode_loss(p);
   std::ostringstream w;
   w << "module E's wideband channel (" << std::setprecision(3)
@@ -398,6 +397,42 @@ std::string wideband_channel_warning(const smc::config::SupervisorConfig& cfg) {
     return {};
   }
   return w.str();
+}
+
+}  // namespace
+
+std::string wideband_channel_warning(const smc::config::SupervisorConfig& cfg) {
+  if (wideband_samples_e_takes(cfg) == 0) return {};
+  common::Diagnostics problems;
+  const Parameters p = read_parameters(cfg, problems);
+  if (!problems.empty()) return {};
+  return channel_warning_text(p);
+}
+
+std::string wideband_channel_warning(double rate_hz, double cutoff_hz, int filter_order,
+                                     const smc::config::Structure& structure) {
+  if (!(rate_hz > 0 && cutoff_hz > 0 && filter_order > 0) || !std::isfinite(rate_hz) ||
+      !std::isfinite(cutoff_hz)) {
+    return {};
+  }
+  Parameters p;
+  p.sample_period_s = 1 / rate_hz;
+  p.vibration_samples_per_tick = 1;
+  p.vibration_sensor_cutoff_hz = cutoff_hz;
+  p.vibration_sensor_order = filter_order;
+  p.vibration_mode_count = 0;
+  for (const auto* modes : {&structure.tool_y(), &structure.part_y()}) {
+    for (const auto& m : *modes) {
+      const double w = m.natural_frequency_rad_s();
+      if (!(w > 0) || !std::isfinite(w)) continue;
+      if (p.vibration_mode_count < Parameters::kMaxVibrationModes) {
+        p.vibration_modes[p.vibration_mode_count++] = {w, m.damping_ratio(),
+                                                       m.stiffness_n_per_mm()};
+      }
+    }
+  }
+  if (p.vibration_mode_count == 0) return {};
+  return channel_warning_text(p);
 }
 
 void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noexcept {

@@ -189,6 +189,12 @@ TEST(Parameters, AWidebandChannelThatHidesAModesChatterIsCalledOut) {
   EXPECT_NEAR(fourth.loss_db, 9.74, 0.01);
   EXPECT_FALSE(fourth.above_nyquist);
   const std::string w = sv::wideband_channel_warning(cfg);
+  // The same sentence from a channel and a structure alone (a machine's
+  // record and its model, as `smc-cell catalog apply` judges them).
+  EXPECT_EQ(sv::wideband_channel_warning(2000, 500, 4, cfg.milling_model().structure()), w);
+  EXPECT_EQ(sv::wideband_channel_warning(2000, 500, 2, cfg.milling_model().structure()), "");
+  EXPECT_EQ(sv::wideband_channel_warning(2000, 500, 4, {}), "") << "no y mode";
+  EXPECT_EQ(sv::wideband_channel_warning(0, 500, 4, cfg.milling_model().structure()), "");
   EXPECT_EQ(w,
             "module E's wideband channel (2 kHz through an order-4 filter at 500 Hz) takes the "
             "structure's y mode at 653 Hz 9.7 dB down, and E undoing it lifts the channel's noise "

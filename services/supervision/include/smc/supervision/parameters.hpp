@@ -10,7 +10,8 @@
 
 namespace smc::config {
 class SupervisorConfig;
-}
+class Structure;
+}  // namespace smc::config
 
 namespace smc::supervision {
 
@@ -255,6 +256,13 @@ inline constexpr double kWidebandModeLossWarnDb = 8;
 // otherwise, and for a configuration that does not read (its own checks
 // report that).
 std::string wideband_channel_warning(const smc::config::SupervisorConfig& cfg);
+// The same for a channel and a structure alone, as a machine's catalog
+// record and a model of it give them (`smc-cell catalog apply`): the
+// channel's rate (Hz), its filter's cut-off (Hz) and order, and the
+// structure's y modes (the first kMaxVibrationModes, as E uses them).
+// Empty where the structure has no y mode or the channel is no channel.
+std::string wideband_channel_warning(double rate_hz, double cutoff_hz, int filter_order,
+                                     const smc::config::Structure& structure);
 
 // Reads and checks every field the modules use, collecting every problem in
 // `problems` (field paths under "supervisor_config."). The result is only
