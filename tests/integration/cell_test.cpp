@@ -547,6 +547,15 @@ TEST_F(Cell, CatalogApplyNotesAChannelThatHidesTheToolsChatter) {
             std::string::npos)
       << plan;
   EXPECT_NE(plan.find("fix: a sensor filter that takes it at most 8 dB down"), std::string::npos);
+  // And where the part's E is listed machine by machine.
+  const std::string part =
+      output_of({bin("smc-cell"), "--log-level", "off", "part", "show", "housing-js", "--db", db_});
+  EXPECT_NE(part.find("its wideband channel 2 kHz, order-4 filter at 500 Hz; warning: module E's "
+                      "wideband channel (2 kHz through an order-4 filter at 500 Hz) takes the "
+                      "structure's y mode at 653 Hz 9.7 dB down"),
+            std::string::npos)
+      << part;
+  EXPECT_EQ(part.find("order-2 filter at 500 Hz; warning"), std::string::npos) << part;
 }
 
 // A machine added to a running cell with `smc-cell catalog apply` takes jobs

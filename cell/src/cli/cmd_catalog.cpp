@@ -96,10 +96,9 @@ std::vector<std::string> channel_notes(store::Store& s, const store::CatalogDocu
   for (const auto& f : docs.machines) {
     const auto& d = f.doc;
     if (!d.has_wideband() || d.wideband().samples_per_tick() == 0) continue;
-    const auto& w = d.wideband();
-    // The edge samples every 0.5 ms: n samples a period are n x 2 kHz.
-    const double rate_hz = 2000.0 * w.samples_per_tick();
-    const int order = w.filter_order() == 0 ? 2 : static_cast<int>(w.filter_order());
+    const store::WidebandChannel w{.samples_per_tick = d.wideband().samples_per_tick(),
+                                   .cutoff_hz = d.wideband().cutoff_hz(),
+                                   .filter_order = d.wideband().filter_order()};
     std::vector<std::pair<std::string, const smc::config::Structure*>> structures;
     const auto stored = s.find_models(d.id(), "", "", "");
     for (const auto& m : stored) {
@@ -113,7 +112,7 @@ std::vector<std::string> channel_notes(store::Store& s, const store::CatalogDocu
     }
     for (const auto& [id, st] : structures) {
       const auto text =
-          smc::supervision::wideband_channel_warning(rate_hz, w.cutoff_hz(), order, *st);
+          smc::supervision::wideband_channel_warning(w.rate_hz(), w.cutoff_hz, w.order(), *st);
       if (text.empty() || !seen.insert(d.id() + text).second) continue;
       notes.push_back("machine " + d.id() + " with the structure of model " + id + ": " + text);
     }

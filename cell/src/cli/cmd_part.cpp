@@ -18,6 +18,7 @@
 #include "smc/cell/learning.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/common/svg_plot.hpp"
+#include "smc/supervision/parameters.hpp"
 #include "smc_config.pb.h"
 
 namespace {
@@ -101,8 +102,15 @@ void print_module_e(store::Store& db, const store::Job& job) {
             "structure E is given\")";
       }
     }
-    if (!m.wideband.is_default())
+    if (!m.wideband.is_default()) {
       line += "; its wideband channel " + store::channel_text(m.wideband);
+      // What that channel hides of the structure E would get.
+      if (s) {
+        const auto w = smc::supervision::wideband_channel_warning(
+            m.wideband.rate_hz(), m.wideband.cutoff_hz, m.wideband.order(), s->milling.structure());
+        if (!w.empty()) line += "; warning: " + w;
+      }
+    }
     std::printf("   on %s: %s\n", m.id.c_str(), line.c_str());
   }
 }

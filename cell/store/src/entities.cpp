@@ -100,8 +100,8 @@ std::string format_time(std::int64_t time_ms) {
 std::string channel_text(const WidebandChannel& w) {
   if (w.is_default()) return {};
   char b[96];
-  std::snprintf(b, sizeof b, "%u kHz, order-%u filter at %g Hz", 2 * w.samples_per_tick,
-                w.filter_order, w.cutoff_hz);
+  std::snprintf(b, sizeof b, "%g kHz, order-%d filter at %g Hz", w.rate_hz() / 1000, w.order(),
+                w.cutoff_hz);
   return b;
 }
 

@@ -21,6 +21,10 @@ struct WidebandChannel {
   std::uint32_t filter_order = 0;
   double noise_rms_n = 0;
   bool is_default() const noexcept { return samples_per_tick == 0; }
+  // Its rate: samples_per_tick samples each 0.5 ms edge period.
+  double rate_hz() const noexcept { return 2000.0 * samples_per_tick; }
+  // Its filter's order (0: the default second).
+  int order() const noexcept { return filter_order == 0 ? 2 : static_cast<int>(filter_order); }
 };
 
 struct Machine {
