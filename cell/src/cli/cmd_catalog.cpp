@@ -95,10 +95,8 @@ std::vector<std::string> channel_notes(store::Store& s, const store::CatalogDocu
   std::set<std::string> seen;
   for (const auto& f : docs.machines) {
     const auto& d = f.doc;
-    if (!d.has_wideband() || d.wideband().samples_per_tick() == 0) continue;
-    const store::WidebandChannel w{.samples_per_tick = d.wideband().samples_per_tick(),
-                                   .cutoff_hz = d.wideband().cutoff_hz(),
-                                   .filter_order = d.wideband().filter_order()};
+    const auto w = store::machine_from_doc(d).wideband;
+    if (w.is_default()) continue;
     std::vector<std::pair<std::string, const smc::config::Structure*>> structures;
     const auto stored = s.find_models(d.id(), "", "", "");
     for (const auto& m : stored) {

@@ -316,6 +316,8 @@ std::string at(const FromFile<T>& f, const char* kind) {
 
 }  // namespace
 
+Machine machine_from_doc(const cfg::CatalogMachine& doc) { return to_row(normal(doc)); }
+
 std::string default_catalog_dir() {
   return fs::path(SMC_CELL_CATALOG_DIR).lexically_normal().string();
 }

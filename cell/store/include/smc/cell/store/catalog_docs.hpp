@@ -39,6 +39,10 @@ struct CatalogDocuments {
 // is read relative to its document. Throws CatalogError.
 CatalogDocuments load_catalog(const std::vector<std::string>& paths);
 
+// The machine a document describes, as apply_catalog would store it (its
+// defaults filled in: name, drive, a channel's filter order).
+Machine machine_from_doc(const smc::config::CatalogMachine& doc);
+
 struct CatalogChange {
   std::string kind;  // machine, tool, material, part, model
   std::string id;
