@@ -23,8 +23,45 @@ AutomaticChatterDetector::AutomaticChatterDetector()
 
 AutomaticChatterDetector::~AutomaticChatterDetector() = default;
 
+namespace {
+
+// Appends `text` (or the decimal digits of `n`) at `at` in `out`, leaving
+// room for the terminating NUL; nothing is allocated (the real-time path).
+template <size_t N>
+void append(std::array<char, N>& out, size_t& at, const char* text) noexcept {
+  for (; *text != '\0' && at + 1 < N; ++text) out[at++] = *text;
+  out[at] = '\0';
+}
+template <size_t N>
+void append(std::array<char, N>& out, size_t& at, int n) noexcept {
+  char digits[12];
+  int k = 0;
+  unsigned v = n < 0 ? 0u : static_cast<unsigned>(n);
+  do {
+    digits[k++] = static_cast<char>('0' + v % 10);
+    v /= 10;
+  } while (v != 0 && k < 11);
+  while (k > 0 && at + 1 < N) out[at++] = digits[--k];
+  out[at] = '\0';
+}
+
+}  // namespace
+
+void AutomaticChatterDetector::channel_mismatch_reason(int brought) noexcept {
+  // Short enough for the edge status's 127 characters with its prefix
+  // ("module error in module E (...)").
+  size_t at = 0;
+  const int given = std::max(brought, 1);  // 0: the one sample a period
+  append(channel_error_, at, "the drive gives ");
+  append(channel_error_, at, given);
+  append(channel_error_, at, given == 1 ? " wideband sample" : " wideband samples");
+  append(channel_error_, at, " a period; operation.wideband_samples_per_tick is ");
+  append(channel_error_, at, per_tick_);
+}
+
 void AutomaticChatterDetector::configure(const EdgeParameters& p) {
   p_ = p;
+  channel_error_[0] = '\0';
   const auto most = static_cast<size_t>(std::max(p.max_samples_per_revolution, 1));
   buffer_.assign(most, 0.0);
   spectrum_.assign(most / 2 + 1, {});
@@ -104,8 +141,8 @@ Status AutomaticChatterDetector::on_sample(Signals& s) noexcept {
   // E disagree on its rate, and the estimate would be wrong: an error (the
   // core holds the feed).
   if (per_tick_ > 1 ? in.wide_count != per_tick_ : in.wide_count > 1) {
-    // (Short enough for the edge status's 127 characters with its prefix.)
-    return fail("wideband samples a period differ from operation.wideband_samples_per_tick");
+    if (channel_error_[0] == '\0') channel_mismatch_reason(in.wide_count);
+    return fail(channel_error_.data());
   }
   const double* f = per_tick_ > 1 ? in.f_y_wide_sub_n : &in.f_y_wide_n;
   for (int j = 0; j < per_tick_; ++j) {

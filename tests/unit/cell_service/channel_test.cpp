@@ -262,8 +262,9 @@ TEST_F(MachineChannel, ARecordThatDoesNotMatchTheMachinesChannelHoldsTheFeed) {
   EXPECT_EQ(wrong.fault, smc::edge::Fault::kModuleError) << smc::edge::to_string(wrong.fault);
   EXPECT_EQ(wrong.summary.chatter_events(), 0u);
   ASSERT_EQ(wrong.summary.faults_size(), 1);
-  EXPECT_NE(wrong.summary.faults(0).find("module error in module E (wideband samples a period "
-                                         "differ from operation.wideband_samples_per_tick)"),
+  EXPECT_NE(wrong.summary.faults(0).find("module error in module E (the drive gives 5 wideband "
+                                         "samples a period; operation.wideband_samples_per_tick "
+                                         "is 1)"),
             std::string::npos)
       << wrong.summary.faults(0);
 
@@ -276,4 +277,9 @@ TEST_F(MachineChannel, ARecordThatDoesNotMatchTheMachinesChannelHoldsTheFeed) {
   EXPECT_FALSE(wrong_too.completed);
   EXPECT_EQ(wrong_too.fault, smc::edge::Fault::kModuleError)
       << smc::edge::to_string(wrong_too.fault);
+  ASSERT_EQ(wrong_too.summary.faults_size(), 1);
+  EXPECT_NE(wrong_too.summary.faults(0).find("(the drive gives 1 wideband sample a period; "
+                                             "operation.wideband_samples_per_tick is 5)"),
+            std::string::npos)
+      << wrong_too.summary.faults(0);
 }

@@ -5,13 +5,17 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <initializer_list>
 #include <numbers>
 #include <random>
+#include <string>
+#include <string_view>
 #include <tuple>
 
+#include "alloc_counter.hpp"
 #include "edge_test_config.hpp"
 #include "smc/edge/program.hpp"
 #include "smc/machining/anti_alias.hpp"
@@ -809,18 +813,41 @@ TEST(AutomaticChatterDetector, AWidebandChannelAtAnotherRateIsAnError) {
       s.sample.wide_count = brought;
       for (int j = 0; j < brought; ++j) s.sample.f_y_wide_sub_n[j] = 400;
       const bool agrees = expected == 1 ? brought == 0 : brought == expected;
-      EXPECT_EQ(e.on_sample(s), agrees ? Status::kOk : Status::kError)
+      Status st{};
+      {
+        smc::test::ForbidAllocations guard;  // the refusal's text included
+        st = e.on_sample(s);
+        EXPECT_EQ(guard.violations(), 0u);
+      }
+      EXPECT_EQ(st, agrees ? Status::kOk : Status::kError)
           << expected << " expected, " << brought << " brought";
       if (!agrees) {
         ASSERT_NE(e.error_reason(), nullptr);
-        EXPECT_STREQ(e.error_reason(),
-                     "wideband samples a period differ from operation.wideband_samples_per_tick")
-            << "the fault hold says why";
+        // The first refusal's counts: the fault hold reports the first cause.
+        const int first = expected == 1 ? 2 : 0;
+        const std::string why = "the drive gives " + std::to_string(std::max(first, 1)) +
+                                (first > 1 ? " wideband samples" : " wideband sample") +
+                                " a period; "
+                                "operation.wideband_samples_per_tick is " +
+                                std::to_string(expected);
+        EXPECT_EQ(e.error_reason(), why) << "the fault hold says why, with both counts";
+        EXPECT_LT(why.size() + std::string_view("module error in module E ()").size(), 127u)
+            << "it fits the edge status";
       }
     }
     s.sample.f_y_wide_n = std::nan("");
     s.sample.wide_count = 0;
     EXPECT_EQ(e.on_sample(s), Status::kOk) << "no channel";
+    // Configured again, the reason is the new configuration's.
+    p.vibration_samples_per_tick = expected == 1 ? 4 : 1;
+    e.configure(p);
+    s.sample.f_y_wide_n = 400;
+    s.sample.wide_count = 3;
+    EXPECT_EQ(e.on_sample(s), Status::kError);
+    EXPECT_EQ(std::string(e.error_reason()),
+              "the drive gives 3 wideband samples a period; "
+              "operation.wideband_samples_per_tick is " +
+                  std::to_string(p.vibration_samples_per_tick));
   }
 }
 

@@ -78,13 +78,16 @@ class Module {
   // Once per period() while active (or when requested(), for kEvent).
   virtual Status update(Signals& s) noexcept = 0;
 
-  // Why the last kError was returned: a static string naming the cause and,
-  // where there is one, the field that fixes it (the fault hold's reason).
+  // Why the last kError was returned: text naming the cause and, where
+  // there is one, the field that fixes it (the fault hold's reason).
   // nullptr: none given.
   const char* error_reason() const noexcept { return error_; }
 
  protected:
-  // Returns kError, keeping `why` (a string literal: nothing is allocated).
+  // Returns kError, keeping `why`: a string literal, or a buffer of the
+  // module's own that it writes once and leaves unchanged until it is
+  // configured again (the fault event carries the pointer to another
+  // thread). Nothing is allocated.
   Status fail(const char* why) noexcept {
     error_ = why;
     return Status::kError;

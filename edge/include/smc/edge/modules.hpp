@@ -172,6 +172,11 @@ class AutomaticChatterDetector final : public Module {
   // (Parameters::vibration_samples_per_tick), channel_period_s_ apart.
   int per_tick_ = 1;
   double channel_period_s_ = 0;
+  // Why the channel was refused, with both counts: written once, the first
+  // time (the fault hold reports the first cause, and the event that
+  // carries this text may still be read), cleared by configure().
+  std::array<char, 112> channel_error_{};
+  void channel_mismatch_reason(int brought) noexcept;
   struct VibrationMode {
     double p11 = 1, p12 = 0, p21 = 0, p22 = 1, g1 = 0, g2 = 0;
     double q = 0, w = 0;
