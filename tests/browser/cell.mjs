@@ -13,7 +13,9 @@
 // Mills are named mill-1 .. mill-N; mill-1 runs SMC II. With breakage: true
 // (real cell, two mills or more), mill-2 cuts the cover under SMC II+ and its
 // tooth 2 breaks 5 s into the job (smc-edge run --break-tooth), and an SMC I
-// job for the bracket waits behind mill-1's.
+// job for the bracket waits behind mill-1's. With channelNote: true (real
+// cell), the catalog also has mill-9, no edge, whose wideband channel the
+// cell warns hides the tool's chatter from module E.
 
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
@@ -36,7 +38,7 @@ async function fakeCell({ binDir, partition, mills }) {
   return { kind: 'fake', procs: [p], log: p };
 }
 
-async function realCell({ binDir, partition, mills, breakage }) {
+async function realCell({ binDir, partition, mills, breakage, channelNote }) {
   const dir = mkdtempSync(join(tmpdir(), 'smc-browser-'));
   const db = join(dir, 'cell.db');
   execFileSync(`${binDir}/smc-cell`, ['db', 'init', '--db', db, '--seed'], { stdio: 'ignore' });
@@ -63,14 +65,27 @@ async function realCell({ binDir, partition, mills, breakage }) {
     writeFileSync(bracket, 'part_id: "bracket-tl"\nmachine_id: "mill-1"\n');
     execFileSync(`${binDir}/smc-cell`, ['job', 'submit', bracket, '--db', db], { stdio: 'ignore' });
   }
+  if (channelNote) {
+    // A machine with no edge running whose dynamometer samples the wideband
+    // channel at 2 kHz through a fourth-order filter at 500 Hz, and a tap
+    // test of it: the cell warns that the filter hides the tool's chatter.
+    const doc = join(dir, 'mill-9.textproto');
+    writeFileSync(doc, 'machines { id: "mill-9" name: "slow-channel mill" max_spindle_power_w: 745.7 ' +
+      'max_feedrate_mm_s: 36 max_spindle_rpm: 3000 wideband { samples_per_tick: 1 cutoff_hz: 500 ' +
+      'filter_order: 4 noise_rms_n: 2 } }\n' +
+      'models { id: "mill-9.tap" machine_id: "mill-9" tool_id: "fm-r25-4t" material_id: "6061-T6" ' +
+      `milling_file: "${join(sourceDir, 'cell/models/paper_face_mill.textproto')}" provenance: PROVENANCE_IDENTIFIED }\n`);
+    execFileSync(`${binDir}/smc-cell`, ['catalog', 'apply', doc, '--db', db], { stdio: 'ignore' });
+  }
   const cleanup = () => rmSync(dir, { recursive: true, force: true });
   return { kind: 'real', procs, log: procs[0], cleanup, db };
 }
 
 // Starts the cell and `mills` mills in `partition`; resolves once they run.
-export async function startCell({ binDir, partition, mills = 2, kind: wanted, breakage = false }) {
+export async function startCell({ binDir, partition, mills = 2, kind: wanted, breakage = false,
+  channelNote = false }) {
   const kind = wanted ?? process.env.SMC_TEST_CELL ?? 'real';
-  const cell = kind === 'real' ? await realCell({ binDir, partition, mills, breakage })
+  const cell = kind === 'real' ? await realCell({ binDir, partition, mills, breakage, channelNote })
                                : await fakeCell({ binDir, partition, mills });
   cell.mills = Array.from({ length: mills }, (_, i) => `mill-${i + 1}`);
   cell.stop = async () => {

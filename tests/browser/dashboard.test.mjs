@@ -16,7 +16,9 @@
 //   5. a screenshot is saved: $SMC_ARTIFACTS_DIR/dashboard.png;
 //   6. mill-2 cuts the cover under SMC II+: its chatter's remedy is the new
 //      spindle speed, and the tooth that breaks 5 s into the job shows as
-//      "tool broken" on its card and in its view (dashboard-breakage.png);
+//      "tool broken" on its card and in its view (dashboard-breakage.png),
+//      and the catalog shows a machine whose wideband channel the cell warns
+//      of, the warning under its channel;
 //   7. the failed job's history page, from the cell's database: charts,
 //      events, plan and programs, its CSV export, and the same page again
 //      after the dashboard restarts (dashboard-job.png; load time printed);
@@ -74,7 +76,7 @@ async function main() {
     step(`partition ${partition}: probe, cell and mills, dashboard`);
     const probe = new Proc('probe', `${BIN}/smc-dashboard-probe`, ['--partition', partition, '--mill', 'mill-1']);
     await probe.waitFor(/^ready$/, 10000);
-    const cell = await startCell({ binDir: BIN, partition, mills: 2, breakage: true });
+    const cell = await startCell({ binDir: BIN, partition, mills: 2, breakage: true, channelNote: true });
     const dashArgs = ['--http', '127.0.0.1:0', '--partition', partition, '--token-file', tokens,
       '--cell-db', cell.db, '--tls-cert', cert, '--tls-key', join(tmp, 'pki/dashboard/https.key')];
     const dash = new Proc('dashboard', `${BIN}/smc-dashboard`, dashArgs);
@@ -191,6 +193,10 @@ async function main() {
         t.includes('cover-jsp') && t.includes('default tool fm-r25-4t is retired') &&
         t.includes('wideband F_y (E)') && t.includes("cell's default");
     }, null, { timeout: 5000 });
+    // mill-9's channel, with the cell's warning under it.
+    const mill9 = await page.locator('#catalog tr', { hasText: 'slow-channel mill' }).textContent();
+    assert.match(mill9, /2 kHz, order-4 filter at 500 Hz/);
+    assert.match(mill9, /warning with model mill-9\.tap: module E's wideband channel \(2 kHz through an order-4 filter at 500 Hz\) takes the structure's y mode at 653 Hz 9\.7 dB down/);
     await page.screenshot({ path: join(ARTIFACTS, 'dashboard-cell.png'), fullPage: true });
 
     step('7. the failed job\'s history page, its CSV, and again after a dashboard restart');

@@ -556,6 +556,29 @@ TEST_F(Cell, CatalogApplyNotesAChannelThatHidesTheToolsChatter) {
             std::string::npos)
       << part;
   EXPECT_EQ(part.find("order-2 filter at 500 Hz; warning"), std::string::npos) << part;
+  // And dashboards: the cell's catalog view carries it beside the machine.
+  start_cell();
+  smc::transport::Participant p({.partition = partition_});
+  smc::wire::DocumentSubscriber<cfg::CatalogView> catalogs(p);
+  std::vector<cfg::MachineNote> notes;
+  bool seen = false;
+  const auto deadline = Clock::now() + 20s;
+  while (!seen && Clock::now() < deadline) {
+    catalogs.take(
+        [&](const std::string&, const cfg::CatalogView& v) {
+          seen = true;
+          notes.assign(v.machine_notes().begin(), v.machine_notes().end());
+        },
+        [](const smc::transport::EnvelopeRejection&) {});
+    if (!seen) std::this_thread::sleep_for(50ms);
+  }
+  ASSERT_TRUE(seen) << "the cell publishes its catalog view";
+  ASSERT_EQ(notes.size(), 1u) << "mill-5 alone: mill-6's second order keeps the mode";
+  EXPECT_EQ(notes[0].machine_id(), "mill-5");
+  EXPECT_EQ(notes[0].model_id(), "mill-5.tap");
+  EXPECT_NE(notes[0].text().find("takes the structure's y mode at 653 Hz 9.7 dB down"),
+            std::string::npos)
+      << notes[0].text();
 }
 
 // A machine added to a running cell with `smc-cell catalog apply` takes jobs

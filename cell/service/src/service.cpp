@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "smc/cell/candidates.hpp"
+#include "smc/cell/channel_notes.hpp"
 #include "smc/cell/dispatch.hpp"
 #include "smc/cell/learning.hpp"
 #include "smc/cell/planner.hpp"
@@ -279,6 +280,15 @@ struct CellService::Impl {
         choice->set_explanation(sel.explanation);
         if (sel.force) choice->add_model_ids(sel.force->id);
         if (sel.milling) choice->add_model_ids(sel.milling->id);
+      }
+      for (const auto& m : db.machines()) {
+        if (m.retired_at_ms != 0) continue;
+        for (auto& n : channel_notes(db, m)) {
+          auto* note = view.add_machine_notes();
+          note->set_machine_id(m.id);
+          note->set_model_id(std::move(n.model_id));
+          note->set_text(std::move(n.text));
+        }
       }
       const std::string body = view.SerializeAsString();
       if (body == catalog_sent) return;

@@ -11,16 +11,15 @@
 #include <fstream>
 #include <map>
 #include <memory>
-#include <set>
 #include <string>
 #include <vector>
 
 #include "registry.hpp"
+#include "smc/cell/channel_notes.hpp"
 #include "smc/cell/store/catalog_docs.hpp"
 #include "smc/cell/store/store.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/machining/frf.hpp"
-#include "smc/supervision/parameters.hpp"
 #include "smc_config.pb.h"
 
 namespace {
@@ -92,27 +91,24 @@ std::string show_entity(store::Store& s, const std::string& kind, const std::str
 // record is accepted all the same: the sensor is what it is.
 std::vector<std::string> channel_notes(store::Store& s, const store::CatalogDocuments& docs) {
   std::vector<std::string> notes;
-  std::set<std::string> seen;
   for (const auto& f : docs.machines) {
     const auto& d = f.doc;
     const auto w = store::machine_from_doc(d).wideband;
     if (w.is_default()) continue;
-    std::vector<std::pair<std::string, const smc::config::Structure*>> structures;
+    std::vector<smc::cell::StructureOf> structures;
     const auto stored = s.find_models(d.id(), "", "", "");
     for (const auto& m : stored) {
       if (m.kind == store::ModelKind::kMilling)
-        structures.emplace_back(m.id, &m.milling.structure());
+        structures.push_back({m.id, &m.milling.structure()});
     }
     for (const auto& m : docs.models) {
       if (m.doc.machine_id() == d.id() && m.doc.has_milling()) {
-        structures.emplace_back(m.doc.id(), &m.doc.milling().structure());
+        structures.push_back({m.doc.id(), &m.doc.milling().structure()});
       }
     }
-    for (const auto& [id, st] : structures) {
-      const auto text =
-          smc::supervision::wideband_channel_warning(w.rate_hz(), w.cutoff_hz, w.order(), *st);
-      if (text.empty() || !seen.insert(d.id() + text).second) continue;
-      notes.push_back("machine " + d.id() + " with the structure of model " + id + ": " + text);
+    for (const auto& n : smc::cell::channel_notes(w, structures)) {
+      notes.push_back("machine " + d.id() + " with the structure of model " + n.model_id + ": " +
+                      n.text);
     }
   }
   return notes;

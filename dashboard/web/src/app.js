@@ -423,11 +423,15 @@ function catalogTables() {
   const cat = c.catalog ?? {};
   const machines = (cat.machines ?? []).map((m) => {
     const live = store.mills.get(m.id);
+    // The cell's warnings on this machine's channel: a y mode of one of its
+    // models' structures that the filter hides from E.
+    const notes = (c.machine_notes ?? []).filter((n) => n.machine_id === m.id);
     return h('tr', {},
       h('td', { class: 'strong' }, m.id), h('td', {}, m.name),
       h('td', {}, `${fmt(m.max_spindle_power_w, 1)} W`), h('td', {}, `${fmt(m.max_feedrate_mm_s, 1)} mm/s`),
       h('td', {}, `${fmt(m.min_spindle_rpm, 0)}-${fmt(m.max_spindle_rpm, 0)} rpm`), h('td', {}, m.drive),
-      h('td', {}, wideband(m.wideband)),
+      h('td', {}, wideband(m.wideband), ...notes.map((n) => h('div', { class: 'channel-warning' },
+        h('span', { class: 'badge warn' }, 'warning'), ` with model ${n.model_id}: ${n.text}`))),
       h('td', {}, live ? edgeBadge(live) : h('span', { class: 'muted' }, 'not seen')));
   });
   const models = new Map((cat.models ?? []).map((m) => [m.id, m]));

@@ -349,6 +349,10 @@ TEST(DashboardApi, ShowsTheCellsCatalogAndItsChoices) {
   choice->set_machine_id("mill-c");
   choice->set_explanation("models on mill-c ...: SMC I on mill-c (transfer line)");
   choice->add_model_ids("bracket-tl.mill-c.force");
+  auto* note = view.add_machine_notes();
+  note->set_machine_id("mill-c");
+  note->set_model_id("mill-c.tap");
+  note->set_text("module E's wideband channel (2 kHz ...) takes the structure's y mode ...");
   catalogs.publish("cell", "catalog", view);
   ASSERT_TRUE(eventually([&] {
     return field(parse_json(http(f.port(), "GET", "/api/catalog").body), "view").has_struct_value();
@@ -363,5 +367,9 @@ TEST(DashboardApi, ShowsTheCellsCatalogAndItsChoices) {
   EXPECT_EQ(field(parts.values(0), "machine_id").string_value(), "mill-c");
   EXPECT_NE(field(parts.values(0), "explanation").string_value().find("SMC I on mill-c"),
             std::string::npos);
+  const auto& notes = field(v, "machine_notes").list_value();
+  ASSERT_EQ(notes.values_size(), 1) << "a machine's channel warning, for the page";
+  EXPECT_EQ(field(notes.values(0), "machine_id").string_value(), "mill-c");
+  EXPECT_EQ(field(notes.values(0), "model_id").string_value(), "mill-c.tap");
   EXPECT_EQ(http(f.port(), "POST", "/api/catalog").status, 405) << "read-only";
 }
