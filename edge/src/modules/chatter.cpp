@@ -525,8 +525,8 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
   }
   s.chatter_ratio = ratio;
   s.chatter_frequency_hz = freq;
-  // With the estimate, S is the backup for chatter locked to a spindle
-  // harmonic, at a threshold above runout's share.
+  // With the estimate, S is at most a backup (off as shipped:
+  // Parameters::chatter_vibration_backup); without it, E's statistic.
   const double threshold = estimate ? p_.chatter_vibration_backup : p_.chatter_threshold;
   const int confirm = estimate ? kVibrationConfirm : p_.chatter_confirm_revolutions;
   above_ = ratio > threshold ? above_ + 1 : 0;

@@ -39,8 +39,10 @@
 // has not called yet (within 3 revolutions) where the mill's q passed the
 // onset's 0.15, or that share 0.5, in the revolution decided on or the
 // three before it, and a false detection where it did not. E judges the vibration it estimates
-// from the simulated dynamometer's wideband F_y channel, with S as the
-// backup (edge/CHATTER.md); --force-only takes the estimate away
+// from the simulated dynamometer's wideband F_y channel (S's backup off as
+// shipped: --vibration-backup 0.7 puts it back; the S_above column counts
+// stable revolutions above 0.7 all the same; edge/CHATTER.md, "S's backup
+// is off"); --force-only takes the estimate away
 // (S alone, as on a sensor without that channel), --vibration-* set its
 // rules' parameters, and --vibration-noise the channel noise it takes out
 // (N rms; the configuration's operation.wideband_noise_rms_n otherwise).
@@ -321,7 +323,7 @@ int main(int argc, char** argv) {
       {"--vibration-flip", &EdgeParameters::chatter_vibration_flip,
        "the estimate's period-doubling share above this in 2 revolutions is chatter"},
       {"--vibration-backup", &EdgeParameters::chatter_vibration_backup,
-       "S above this in 3 revolutions is chatter (the backup)"},
+       "S above this in 3 revolutions is chatter (the backup; above 1, as shipped: off)"},
       {"--vibration-noise", &EdgeParameters::vibration_sensor_noise_rms_n,
        "the channel noise E takes out, N rms (the configuration's otherwise)"},
   };
@@ -558,9 +560,20 @@ int main(int argc, char** argv) {
   }
   tune(shown);
   const bool estimate = shown.vibration_mode_count > 0;
-  // S's threshold in use: the backup's beside the estimate.
-  const double threshold = estimate ? shown.chatter_vibration_backup : shown.chatter_threshold;
+  // S's threshold in use: the backup's beside the estimate; with the backup
+  // off (as shipped), the level it had until 2026-11-30, which the S_above
+  // column and the margin still count against (no rule reads it).
+  constexpr double kFormerBackup = 0.7;
+  const double threshold = !estimate                             ? shown.chatter_threshold
+                           : shown.chatter_vibration_backup <= 1 ? shown.chatter_vibration_backup
+                                                                 : kFormerBackup;
   if (estimate) {
+    char backup_text[96] = "; S, the non-harmonic share of F_z energy, is no backup";
+    if (shown.chatter_vibration_backup <= 1) {
+      std::snprintf(backup_text, sizeof backup_text,
+                    "; or when S, the non-harmonic share of F_z energy, exceeds %.2f in 3",
+                    shown.chatter_vibration_backup);
+    }
     std::printf(
         "module E: the vibration estimated from the wideband F_y through %d y modes (the "
         "channel's %.0f Hz filter undone, %.1f N rms of its noise taken out), q = RMS(v_k - "
@@ -572,8 +585,7 @@ int main(int argc, char** argv) {
         "%.0f%%, or rises three times in a row by more than x%.2f each from %.2f to past "
         "%.2f (to past %.2f where S, below, rose by more than x%.2f in each of the last two), "
         "or exceeds %.2f in 3; or when the estimate's share at the spindle orders halfway "
-        "between tooth harmonics (a period doubling) exceeds %.2f in %d; or when S, the "
-        "non-harmonic share of F_z energy, exceeds %.2f in 3%s",
+        "between tooth harmonics (a period doubling) exceeds %.2f in %d%s%s",
         shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
         shown.vibration_sensor_noise_rms_n, shown.chatter_vibration_rise,
         shown.chatter_vibration_climb, shown.chatter_vibration_pause,
@@ -584,7 +596,7 @@ int main(int argc, char** argv) {
         shown.chatter_vibration_steep_from, shown.chatter_vibration_steep,
         shown.chatter_vibration_confirmed, shown.chatter_vibration_confirmed_growth,
         shown.chatter_vibration_level, shown.chatter_vibration_flip,
-        shown.chatter_vibration_flip_revolutions, shown.chatter_vibration_backup,
+        shown.chatter_vibration_flip_revolutions, backup_text,
         shown.chatter_vibration_keep_across_steps
             ? " (q's rules keep their history across a step in the mean F_z, save where the "
               "cutter crosses an aborted pass's ledge)"

@@ -579,31 +579,45 @@ int first_detection(const EdgeParameters& p, std::initializer_list<double> chatt
 // Runout puts F_z energy at spindle orders between the tooth harmonics, which
 // S (one revolution's spectrum, whose bins are the spindle orders) counts as
 // chatter. The vibration estimate repeats every revolution and cancels: with
-// the wideband channel E does not fire on it; without, S alone does.
+// the wideband channel E does not fire on it, however much of F_z's energy
+// the runout takes (S 0.5, then 0.88: the detector study's stable cuts
+// reached 0.85, and S above 0.7 for three revolutions fired E's former
+// backup in eight of them); without, S alone does.
 TEST(AutomaticChatterDetector, WithTheWidebandChannelRunoutIsNotChatter) {
-  const EdgeParameters p = with_y_modes(params());
-  AutomaticChatterDetector e;
-  e.configure(p);
-  int k0 = 0;
-  double most_q = 0;
-  for (int r = 0; r < 20; ++r) {
-    const Signals s = wide_revolution(e, p, k0, 50, 0);
-    if (r >= 2) {
-      EXPECT_GT(s.chatter_ratio, p.chatter_threshold) << "revolution " << r;
-      EXPECT_LT(s.chatter_ratio, p.chatter_vibration_backup) << "revolution " << r;
+  for (const double runout : {50.0, 150.0}) {
+    for (const int per_tick : {1, 5}) {
+      EdgeParameters p = with_y_modes(params());
+      if (per_tick > 1) {  // the rules chosen for the shipped 10 kHz channel
+        smc::supervision::set_vibration_rules_for_channel(p, per_tick / p.sample_period_s);
+      }
+      AutomaticChatterDetector e;
+      e.configure(p);
+      int k0 = 0;
+      double most_q = 0, least_s = 1;
+      for (int r = 0; r < 20; ++r) {
+        const Signals s = wide_revolution(e, p, k0, runout, 0);
+        if (r >= 2) {
+          EXPECT_GT(s.chatter_ratio, p.chatter_threshold) << "revolution " << r;
+          least_s = std::min(least_s, s.chatter_ratio);
+        }
+        if (r >= 3) {
+          EXPECT_GT(s.chatter_vibration_ratio, 0) << "judged from the third revolution";
+        }
+        most_q = std::max(most_q, s.chatter_vibration_ratio);
+        ASSERT_FALSE(s.chatter_detected)
+            << "revolution " << r << ", runout " << runout << ", S " << s.chatter_ratio;
+      }
+      EXPECT_LT(most_q, 0.01);
+      if (runout > 100) {
+        EXPECT_GT(least_s, 0.85) << "most of F_z's energy off the tooth harmonics";
+      }
     }
-    if (r >= 3) {
-      EXPECT_GT(s.chatter_vibration_ratio, 0) << "judged from the third revolution";
-    }
-    most_q = std::max(most_q, s.chatter_vibration_ratio);
-    ASSERT_FALSE(s.chatter_detected) << "revolution " << r;
   }
-  EXPECT_LT(most_q, 0.01);
-
   // The same cut on a sensor without the channel: S alone, and it fires.
+  const EdgeParameters p = with_y_modes(params());
   AutomaticChatterDetector alone;
   alone.configure(p);
-  k0 = 0;
+  int k0 = 0;
   Signals s;
   for (int r = 0; r < 3; ++r) s = wide_revolution(alone, p, k0, 50, 0, false);
   EXPECT_EQ(s.chatter_vibration_ratio, 0) << "no estimate without the channel";
@@ -1842,7 +1856,6 @@ TEST(AutomaticChatterDetector, ASteepClimbThatSConfirmsIsChatter) {
   const double cg = p.chatter_vibration_confirmed_growth;
   EXPECT_GT(share[2], cg * share[1]) << "S rose";
   EXPECT_GT(share[3], cg * share[2]) << "and rose again";
-  EXPECT_LT(share[3], p.chatter_vibration_backup) << "below S's own backup";
 
   std::vector<double> ignored, flat;
   EXPECT_EQ(run(p, {60, 60, 60, 60, 0, 0}, &ignored, &flat), -1)

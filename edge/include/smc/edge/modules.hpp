@@ -104,7 +104,7 @@ class OperatorChatterDetector final : public Module {
 // three times while growing by half, or jumping past `jump` and held there
 // a revolution; q above `level`; the estimate's share at the spindle
 // orders halfway between tooth harmonics, a period doubling, above `flip`;
-// or S above `backup`), both energies less the channel's expected noise
+// or S above `backup`, where it is on), both energies less the channel's expected noise
 // (Parameters::vibration_sensor_noise_rms_n); without the channel,
 // by S above `chatter_threshold` in `chatter_confirm_revolutions`
 // consecutive judged revolutions. It stays set until reset.

@@ -150,10 +150,12 @@ struct Parameters {
   // together); or exceeds `level` in three in a row; or when the estimated
   // vibration's share at the spindle orders halfway between tooth harmonics
   // exceeds `flip` in `flip_revolutions` in a row (a period doubling, with an even number of
-  // teeth, repeats every revolution: q sees it only while it grows); or when
-  // F_z's non-harmonic share exceeds `backup` in three (chatter locked to a
-  // spindle harmonic repeats every revolution, and only F_z's spectrum shows
-  // it once grown).
+  // teeth, repeats every revolution: q sees it only while it grows); or, where
+  // `backup` is at most 1, when F_z's non-harmonic share exceeds it in three
+  // (off since 2026-11-30, kNoBackup: runout alone took S past 0.7 for
+  // three revolutions in stable cuts, and to 0.85 in one, at speeds and
+  // widths off the study's grid, while q and the period doubling's share
+  // caught every chatter it had caught; edge/CHATTER.md, "S's backup").
   double chatter_vibration_rise = 0.22;
   double chatter_vibration_climb = 0.14;
   double chatter_vibration_pause = 0.18;
@@ -172,7 +174,8 @@ struct Parameters {
   double chatter_vibration_level = 0.8;
   double chatter_vibration_flip = 0.5;
   int chatter_vibration_flip_revolutions = 2;
-  double chatter_vibration_backup = 0.7;
+  static constexpr double kNoBackup = 2;  // above any share: the backup is off
+  double chatter_vibration_backup = kNoBackup;
   // A revolution not judged because the mean F_z rose by more than a tenth
   // beyond the engagement's rise (a step in the cut, or chatter's own
   // growth): false forgets the rules' last revolutions there, true keeps
