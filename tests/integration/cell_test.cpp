@@ -169,6 +169,24 @@ class Cell : public ::testing::Test {
     return false;
   }
   static bool in_state(const store::Job& j, cfg::JobState s) { return j.state == s; }
+  // The first catalog view the cell publishes (smc_catalog, transient-local)
+  // for which `pred` holds, within 20 s; none after that.
+  std::optional<cfg::CatalogView> catalog_view_where(
+      const std::function<bool(const cfg::CatalogView&)>& pred) {
+    smc::transport::Participant p({.partition = partition_});
+    smc::wire::DocumentSubscriber<cfg::CatalogView> catalogs(p);
+    std::optional<cfg::CatalogView> found;
+    const auto deadline = Clock::now() + 20s;
+    while (!found && Clock::now() < deadline) {
+      catalogs.take(
+          [&](const std::string&, const cfg::CatalogView& v) {
+            if (!found && pred(v)) found = v;
+          },
+          [](const smc::transport::EnvelopeRejection&) {});
+      if (!found) std::this_thread::sleep_for(50ms);
+    }
+    return found;
+  }
 
   std::string partition_;
   std::filesystem::path dir_;
@@ -558,22 +576,10 @@ TEST_F(Cell, CatalogApplyNotesAChannelThatHidesTheToolsChatter) {
   EXPECT_EQ(part.find("order-2 filter at 500 Hz; warning"), std::string::npos) << part;
   // And dashboards: the cell's catalog view carries it beside the machine.
   start_cell();
-  smc::transport::Participant p({.partition = partition_});
-  smc::wire::DocumentSubscriber<cfg::CatalogView> catalogs(p);
-  std::vector<cfg::MachineNote> notes;
-  bool seen = false;
-  const auto deadline = Clock::now() + 20s;
-  while (!seen && Clock::now() < deadline) {
-    catalogs.take(
-        [&](const std::string&, const cfg::CatalogView& v) {
-          seen = true;
-          notes.assign(v.machine_notes().begin(), v.machine_notes().end());
-        },
-        [](const smc::transport::EnvelopeRejection&) {});
-    if (!seen) std::this_thread::sleep_for(50ms);
-  }
-  ASSERT_TRUE(seen) << "the cell publishes its catalog view";
-  ASSERT_EQ(notes.size(), 1u) << "mill-5 alone: mill-6's second order keeps the mode";
+  const auto view = catalog_view_where([](const cfg::CatalogView&) { return true; });
+  ASSERT_TRUE(view) << "the cell publishes its catalog view";
+  const auto& notes = view->machine_notes();
+  ASSERT_EQ(notes.size(), 1) << "mill-5 alone: mill-6's second order keeps the mode";
   EXPECT_EQ(notes[0].machine_id(), "mill-5");
   EXPECT_EQ(notes[0].model_id(), "mill-5.tap");
   EXPECT_NE(notes[0].text().find("takes the structure's y mode at 653 Hz 9.7 dB down"),
@@ -639,23 +645,17 @@ TEST_F(Cell, AMachineAddedByCatalogApplyTakesJobsWithoutARestart) {
             std::string::npos)
       << listed;
   // Dashboards see the catalog with the new machine (smc_catalog, transient-local).
-  smc::transport::Participant p({.partition = partition_});
-  smc::wire::DocumentSubscriber<cfg::CatalogView> catalogs(p);
-  bool seen = false;
+  const auto view = catalog_view_where([](const cfg::CatalogView& v) {
+    for (const auto& m : v.catalog().machines()) {
+      if (m.id() == "mill-3") return true;
+    }
+    return false;
+  });
+  ASSERT_TRUE(view) << "the cell's catalog view names mill-3";
   std::string choice;
-  const auto deadline = Clock::now() + 20s;
-  while (!seen && Clock::now() < deadline) {
-    catalogs.take(
-        [&](const std::string&, const cfg::CatalogView& v) {
-          for (const auto& m : v.catalog().machines()) seen = seen || m.id() == "mill-3";
-          for (const auto& c : v.parts()) {
-            if (c.part_id() == "bracket-tl") choice = c.explanation();
-          }
-        },
-        [](const smc::transport::EnvelopeRejection&) {});
-    if (!seen) std::this_thread::sleep_for(50ms);
+  for (const auto& c : view->parts()) {
+    if (c.part_id() == "bracket-tl") choice = c.explanation();
   }
-  EXPECT_TRUE(seen) << "the cell's catalog view names mill-3";
   // Only mill-3's edge runs: the transfer-line part's models are on the
   // others, so a job of it would run SMC II, each machine's reason given.
   EXPECT_NE(choice.find("mill-1: has usable models but its edge is lost"), std::string::npos)
