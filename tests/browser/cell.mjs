@@ -16,10 +16,13 @@
 // job for the bracket waits behind mill-1's. With channelNote: true (real
 // cell), the catalog also has mill-9, no edge, whose wideband channel the
 // cell warns hides the tool's chatter from module E.
+//
+// The real cell keeps its database and documents in `workDir`/cell: the
+// caller's temporary folder, which the caller removes however the test ends
+// (stopAll() stops the processes but knows nothing of folders).
 
 import { execFileSync } from 'node:child_process';
-import { mkdtempSync, rmSync, writeFileSync } from 'node:fs';
-import { tmpdir } from 'node:os';
+import { mkdirSync, writeFileSync } from 'node:fs';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
@@ -38,8 +41,10 @@ async function fakeCell({ binDir, partition, mills }) {
   return { kind: 'fake', procs: [p], log: p };
 }
 
-async function realCell({ binDir, partition, mills, breakage, channelNote }) {
-  const dir = mkdtempSync(join(tmpdir(), 'smc-browser-'));
+async function realCell({ binDir, partition, mills, breakage, channelNote, workDir }) {
+  if (!workDir) throw new Error('startCell: a real cell needs workDir (a folder the caller removes)');
+  const dir = join(workDir, 'cell');
+  mkdirSync(dir);
   const db = join(dir, 'cell.db');
   execFileSync(`${binDir}/smc-cell`, ['db', 'init', '--db', db, '--seed'], { stdio: 'ignore' });
   const procs = [new Proc('smc-cell', `${binDir}/smc-cell`,
@@ -77,20 +82,15 @@ async function realCell({ binDir, partition, mills, breakage, channelNote }) {
       `milling_file: "${join(sourceDir, 'cell/models/paper_face_mill.textproto')}" provenance: PROVENANCE_IDENTIFIED }\n`);
     execFileSync(`${binDir}/smc-cell`, ['catalog', 'apply', doc, '--db', db], { stdio: 'ignore' });
   }
-  const cleanup = () => rmSync(dir, { recursive: true, force: true });
-  return { kind: 'real', procs, log: procs[0], cleanup, db };
+  return { kind: 'real', procs, log: procs[0], db };
 }
 
 // Starts the cell and `mills` mills in `partition`; resolves once they run.
-export async function startCell({ binDir, partition, mills = 2, kind: wanted, breakage = false,
-  channelNote = false }) {
+export async function startCell({ binDir, partition, workDir, mills = 2, kind: wanted,
+  breakage = false, channelNote = false }) {
   const kind = wanted ?? process.env.SMC_TEST_CELL ?? 'real';
-  const cell = kind === 'real' ? await realCell({ binDir, partition, mills, breakage, channelNote })
+  const cell = kind === 'real' ? await realCell({ binDir, partition, mills, breakage, channelNote, workDir })
                                : await fakeCell({ binDir, partition, mills });
   cell.mills = Array.from({ length: mills }, (_, i) => `mill-${i + 1}`);
-  cell.stop = async () => {
-    await Promise.all(cell.procs.map((p) => p.stop()));
-    if (cell.cleanup) cell.cleanup();
-  };
   return cell;
 }

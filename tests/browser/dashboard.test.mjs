@@ -58,9 +58,16 @@ function step(text) {
 }
 
 let context = null;  // the browser, closed whatever happens
+// The test's files (tokens, PKI, the browser's profile, the cell's database),
+// removed whatever happens.
+const tmp = mkdtempSync(join(tmpdir(), 'smc-browser-'));
+async function cleanUp() {
+  if (context) await context.close().catch(() => {});
+  await stopAll();
+  rmSync(tmp, { recursive: true, force: true });
+}
 
 async function main() {
-  const tmp = mkdtempSync(join(tmpdir(), 'smc-browser-'));
   const partition = `browser-${process.pid}-${Date.now()}`;
   const pageErrors = [];
   try {
@@ -76,7 +83,7 @@ async function main() {
     step(`partition ${partition}: probe, cell and mills, dashboard`);
     const probe = new Proc('probe', `${BIN}/smc-dashboard-probe`, ['--partition', partition, '--mill', 'mill-1']);
     await probe.waitFor(/^ready$/, 10000);
-    const cell = await startCell({ binDir: BIN, partition, mills: 2, breakage: true, channelNote: true });
+    const cell = await startCell({ binDir: BIN, partition, workDir: tmp, mills: 2, breakage: true, channelNote: true });
     const dashArgs = ['--http', '127.0.0.1:0', '--partition', partition, '--token-file', tokens,
       '--cell-db', cell.db, '--tls-cert', cert, '--tls-key', join(tmp, 'pki/dashboard/https.key')];
     const dash = new Proc('dashboard', `${BIN}/smc-dashboard`, dashArgs);
@@ -248,22 +255,18 @@ async function main() {
     assert.deepEqual(pageErrors, [], 'no errors in the page');
     step('PASS');
   } finally {
-    if (context) await context.close().catch(() => {});
-    await stopAll();
-    rmSync(tmp, { recursive: true, force: true });
+    await cleanUp();
   }
 }
 
 const watchdog = setTimeout(async () => {
   console.error(`[browser test] FAIL: not done within ${DEADLINE_MS} ms`);
-  if (context) await context.close().catch(() => {});
-  await stopAll();
+  await cleanUp();
   process.exit(1);
 }, DEADLINE_MS);
 for (const sig of ['SIGINT', 'SIGTERM']) {
   process.on(sig, async () => {
-    if (context) await context.close().catch(() => {});
-    await stopAll();
+    await cleanUp();
     process.exit(1);
   });
 }

@@ -46,7 +46,7 @@ async function main() {
   try {
     const partition = `bench-browser-${process.pid}-${Date.now()}`;
     // Many mills, cheaply: the fake cell (SMC_TEST_CELL=real for the real one).
-    const cell = await startCell({ binDir: BIN, partition, mills: MILLS,
+    const cell = await startCell({ binDir: BIN, partition, workDir: tmp, mills: MILLS,
                                    kind: process.env.SMC_TEST_CELL ?? 'fake' });
     const dash = new Proc('dashboard', `${BIN}/smc-dashboard`,
       ['--http', '127.0.0.1:0', '--partition', partition, '--log-level', 'warn']);
