@@ -123,6 +123,7 @@ void AutomaticChatterDetector::reset() noexcept {
   wide_channel_ = false;
   q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
   q_above_ = flip_above_ = 0;
+  whole1_ = false;
   last_flip_ = 0;
 }
 
@@ -376,6 +377,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
     wide_channel_ = false;
     q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
     q_above_ = flip_above_ = 0;
+    whole1_ = false;
     return Status::kOk;
   }
   double freq = 0;
@@ -405,6 +407,12 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       mean_before != 0 &&
       std::fabs(last_mean_) > std::fabs(mean_before) * engaged_more * (1 + kMaxMeanChange);
   if (!(engagement <= last_engagement_)) most_engaged_ = engagement;  // rose, or was unknown
+  // The cutter wholly in the part from the revolution's start to its end
+  // (it enters or leaves monotonically; NaN, unknown: not so), and not
+  // crossing an aborted pass's ledge (a step in the depth, and the
+  // controller's answer to it: an entry of its own).
+  const bool whole =
+      engagement >= kWholeEngagement && last_engagement_ >= kWholeEngagement && !s.crossing_ledge;
   last_engagement_ = engagement;
   const bool leaving = engagement < most_engaged_ - 1e-9;
 
@@ -482,6 +490,19 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       const bool confirmed = climbed && q > p_.chatter_vibration_confirmed && s2_ > 0 &&
                              s1_ > cg * s2_ && sq > cg * s1_;
       q_above_ = q > p_.chatter_vibration_level ? q_above_ + 1 : 0;
+      // Held: above `held` on average over this revolution and the one
+      // before, neither below `held_floor` (one revolution's jump is no
+      // hold), both with the cutter wholly in the part. There a stable
+      // cut's q stays far below the label's 0.15 (at most 0.11 over two
+      // revolutions in the detector study's sets at 10 kHz), while chatter
+      // at the edge of stability may hover just above it for revolutions
+      // before it grows (0.154, 0.151, 0.160, 0.167 at 900 rpm), which no
+      // rule on its growth reads. Entering the part, or crossing a ledge,
+      // stable cuts' q passes 0.15 for revolutions: no level rule there
+      // (edge/CHATTER.md, "The held rule").
+      const double floor_held = p_.chatter_vibration_held_floor;
+      const bool held = whole && whole1_ && q > floor_held && q1_ > floor_held &&
+                        (q + q1_) / 2 > p_.chatter_vibration_held;
       // A period doubling: with an even number of teeth the vibration at
       // the spindle orders halfway between tooth harmonics repeats every
       // revolution, so q sees it only while it grows (from the first
@@ -492,7 +513,7 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       // 2 with a channel at the loop's rate).
       s.chatter_vibration_flip = last_flip_;
       flip_above_ = last_flip_ > p_.chatter_vibration_flip ? flip_above_ + 1 : 0;
-      if (rising || climbing || pausing || net || jumped || steep || confirmed ||
+      if (rising || climbing || pausing || net || jumped || steep || confirmed || held ||
           q_above_ >= kVibrationConfirm ||
           flip_above_ >= std::max(1, p_.chatter_vibration_flip_revolutions)) {
         s.chatter_detected = true;
@@ -500,12 +521,14 @@ Status AutomaticChatterDetector::update(Signals& s) noexcept {
       q3_ = q2_;
       q2_ = q1_;
       q1_ = q;
+      whole1_ = whole;
       s2_ = s1_;
       s1_ = sq;
     } else if (!(stepped && !leaving && std::isfinite(q) &&
                  p_.chatter_vibration_keep_across_steps && !s.crossing_ledge)) {
       q1_ = q2_ = q3_ = s1_ = s2_ = std::numeric_limits<double>::quiet_NaN();
       q_above_ = flip_above_ = 0;
+      whole1_ = false;
     }
     // (Across a step, with keep_across_steps, the revolution is not judged
     // and the rules' history is kept: chatter's own growth raises the mean

@@ -445,6 +445,7 @@ void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noex
   p.chatter_vibration_growth = loop_rate.chatter_vibration_growth;
   p.chatter_vibration_flip_revolutions = loop_rate.chatter_vibration_flip_revolutions;
   p.chatter_vibration_keep_across_steps = loop_rate.chatter_vibration_keep_across_steps;
+  p.chatter_vibration_held = loop_rate.chatter_vibration_held;
   // A rate a hair under 10 kHz from the division is still 10 kHz.
   if (channel_rate_hz >= kFineChannelRateHz * (1 - 1e-9)) {
     // Chosen on the detector study's grid and full runs at 10 kHz with the
@@ -464,6 +465,13 @@ void set_vibration_rules_for_channel(Parameters& p, double channel_rate_hz) noex
     p.chatter_vibration_growth = 1.0;
     p.chatter_vibration_flip_revolutions = 3;
     p.chatter_vibration_keep_across_steps = true;
+    // q held at the label's threshold with the cutter wholly in the part
+    // (two judged revolutions' mean above it, neither below 0.14): stable
+    // cuts there stay below 0.12, while chatter that hovers just above 0.15
+    // before it grows gave no other rule its pattern. At 10 kHz only: at 4
+    // kHz E's q reads too far from the mill's for a level at the label's
+    // own threshold (edge/CHATTER.md, "The held rule").
+    if (channel_rate_hz >= kHeldRuleChannelRateHz * (1 - 1e-9)) p.chatter_vibration_held = 0.15;
   }
 }
 

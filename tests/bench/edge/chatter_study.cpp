@@ -9,7 +9,8 @@
 //       [--vibration-net-dip X] [--vibration-jump X] [--vibration-jump-growth X]
 //       [--vibration-jump-dip X] [--vibration-steep X] [--vibration-steep-growth X]
 //       [--vibration-steep-from X] [--vibration-confirmed X]
-//       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-flip X]
+//       [--vibration-confirmed-growth X] [--vibration-level X] [--vibration-held X]
+//       [--vibration-held-floor X] [--vibration-flip X]
 //       [--vibration-backup X] [--vibration-flip-revolutions N] [--vibration-forget-across-steps]
 //       [--vibration-noise N] [--channel-noise N] [--wide-cutoff HZ] [--wide-order N]
 //       [--wide-samples N] [--sample-period S] [--mill-model FILE] [--no-regeneration]
@@ -320,6 +321,11 @@ int main(int argc, char** argv) {
        "S's growth in each of the last two revolutions that confirms"},
       {"--vibration-level", &EdgeParameters::chatter_vibration_level,
        "q above this in 3 revolutions is chatter"},
+      {"--vibration-held", &EdgeParameters::chatter_vibration_held,
+       "q above this on average over 2 revolutions, the cutter wholly in the part, is chatter "
+       "(above 2: off)"},
+      {"--vibration-held-floor", &EdgeParameters::chatter_vibration_held_floor,
+       "the held rule's floor: neither revolution below it"},
       {"--vibration-flip", &EdgeParameters::chatter_vibration_flip,
        "the estimate's period-doubling share above this in 2 revolutions is chatter"},
       {"--vibration-backup", &EdgeParameters::chatter_vibration_backup,
@@ -399,6 +405,9 @@ int main(int argc, char** argv) {
       std::snprintf(help, sizeof help, "%s", k.what);
     } else if (shipped.*k.field == at_loop.*k.field) {
       std::snprintf(help, sizeof help, "%s (shipped: %g)", k.what, shipped.*k.field);
+    } else if (k.field == &EdgeParameters::chatter_vibration_held) {
+      std::snprintf(help, sizeof help, "%s (shipped: %g at 10 kHz, off at 2 kHz)", k.what,
+                    shipped.*k.field);
     } else {
       std::snprintf(help, sizeof help, "%s (shipped: %g at 10 kHz, %g at 2 kHz)", k.what,
                     shipped.*k.field, at_loop.*k.field);
@@ -529,7 +538,8 @@ int main(int argc, char** argv) {
   auto mute = [](EdgeParameters& ep) {
     ep.chatter_vibration_rise = ep.chatter_vibration_climb = ep.chatter_vibration_pause =
         ep.chatter_vibration_net = ep.chatter_vibration_jump = ep.chatter_vibration_steep =
-            ep.chatter_vibration_confirmed = ep.chatter_vibration_level = HUGE_VAL;
+            ep.chatter_vibration_confirmed = ep.chatter_vibration_level =
+                ep.chatter_vibration_held = HUGE_VAL;
     ep.chatter_vibration_flip = 2;                           // a share: at most 1
     ep.chatter_vibration_backup = ep.chatter_threshold = 2;  // S is a share: at most 1
   };
@@ -574,6 +584,13 @@ int main(int argc, char** argv) {
                     "; or when S, the non-harmonic share of F_z energy, exceeds %.2f in 3",
                     shown.chatter_vibration_backup);
     }
+    char held_text[128] = "";
+    if (shown.chatter_vibration_held <= 2) {
+      std::snprintf(held_text, sizeof held_text,
+                    ", or exceeds %.3f on average over 2, neither below %.3f, with the cutter "
+                    "wholly in the part",
+                    shown.chatter_vibration_held, shown.chatter_vibration_held_floor);
+    }
     std::printf(
         "module E: the vibration estimated from the wideband F_y through %d y modes (the "
         "channel's %.0f Hz filter undone, %.1f N rms of its noise taken out), q = RMS(v_k - "
@@ -584,7 +601,7 @@ int main(int argc, char** argv) {
         "jumps past %.2f by more than x%.2f and stays above it, falling by no more than "
         "%.0f%%, or rises three times in a row by more than x%.2f each from %.2f to past "
         "%.2f (to past %.2f where S, below, rose by more than x%.2f in each of the last two), "
-        "or exceeds %.2f in 3; or when the estimate's share at the spindle orders halfway "
+        "or exceeds %.2f in 3%s; or when the estimate's share at the spindle orders halfway "
         "between tooth harmonics (a period doubling) exceeds %.2f in %d%s%s",
         shown.vibration_mode_count, shown.vibration_sensor_cutoff_hz,
         shown.vibration_sensor_noise_rms_n, shown.chatter_vibration_rise,
@@ -595,7 +612,7 @@ int main(int argc, char** argv) {
         100 * shown.chatter_vibration_jump_dip, shown.chatter_vibration_steep_growth,
         shown.chatter_vibration_steep_from, shown.chatter_vibration_steep,
         shown.chatter_vibration_confirmed, shown.chatter_vibration_confirmed_growth,
-        shown.chatter_vibration_level, shown.chatter_vibration_flip,
+        shown.chatter_vibration_level, held_text, shown.chatter_vibration_flip,
         shown.chatter_vibration_flip_revolutions, backup_text,
         shown.chatter_vibration_keep_across_steps
             ? " (q's rules keep their history across a step in the mean F_z, save where the "

@@ -509,10 +509,12 @@ namespace {
 // false: a sensor without the wideband channel (NaN). `chatter_z`: the same
 // tone's amplitude in F_z, which S sees.
 Signals wide_revolution(AutomaticChatterDetector& e, const EdgeParameters& p, int& k0,
-                        double runout, double chatter, bool wide = true, double chatter_z = 0) {
+                        double runout, double chatter, bool wide = true, double chatter_z = 0,
+                        double engagement = 1, bool crossing_ledge = false) {
   Signals s;
   s.spindle_rpm = 1500;
-  s.engagement = 1;
+  s.engagement = engagement;
+  s.crossing_ledge = crossing_ledge;
   s.revolution_samples = p.samples_per_revolution;
   for (int k = 0; k < p.samples_per_revolution; ++k, ++k0) {
     const double t = k0 * p.sample_period_s;
@@ -863,6 +865,87 @@ TEST(AutomaticChatterDetector, AWidebandChannelAtAnotherRateIsAnError) {
               "operation.wideband_samples_per_tick is " +
                   std::to_string(p.vibration_samples_per_tick));
   }
+}
+
+// Chatter at the edge of stability may hover just above the label's 0.15
+// for revolutions before it grows (the detector study at 900 rpm: 0.154,
+// 0.151, 0.160, 0.167), which no rule on q's growth reads. With the cutter
+// wholly in the part, q above `held` on average over two revolutions is
+// chatter; entering the part (the engagement below 1 at either end of
+// either revolution) or where the drive cannot tell (NaN), it is not, as
+// a stable cut's entry takes q past 0.15 for revolutions.
+TEST(AutomaticChatterDetector, QHeldAboveTheThresholdInTheWholeCutIsChatter) {
+  EdgeParameters p = with_y_modes(params());
+  EXPECT_GT(p.chatter_vibration_held, 2) << "off at the loop's rate";
+  p.chatter_vibration_held = 0.15;  // the 10 kHz set's
+  // Twelve revolutions of a steady tone (q about 0.13), then a little more
+  // of it, alternating, whose q hovers at 0.156-0.166 without growing:
+  // `engagement(r)` the drive's engagement at the end of revolution r (r < 0:
+  // the twelve); the revolution detected (-1: none) and the q read.
+  auto run = [&](const EdgeParameters& params, auto engagement, std::vector<double>* q,
+                 bool ledge = false, double first = 13.6) {
+    AutomaticChatterDetector e;
+    e.configure(params);
+    int k0 = 0;
+    for (int r = -12; r < 0; ++r) wide_revolution(e, params, k0, 0, 10, true, 0, engagement(r));
+    const double tone[] = {first, 13.2, 13.6, 13.2, 13.6, 13.2, 13.6, 13.2};
+    for (int r = 0; r < 8; ++r) {
+      const Signals s = wide_revolution(e, params, k0, 0, tone[r], true, 0, engagement(r), ledge);
+      q->push_back(s.chatter_vibration_ratio);
+      if (s.chatter_detected) return r;
+    }
+    return -1;
+  };
+  auto whole = [](int) { return 1.0; };
+  std::vector<double> q;
+  const int at = run(p, whole, &q);
+  ASSERT_EQ(at, 2) << "the step's revolution reads 0.137; then two held above 0.15";
+  for (size_t r = 1; r < q.size(); ++r) {
+    EXPECT_GT(q[r], 0.15) << r;
+    EXPECT_LT(q[r], 0.18) << r << ": below every other rule's level";
+  }
+  EXPECT_LT((q[0] + q[1]) / 2, p.chatter_vibration_held);
+  EXPECT_GT((q[1] + q[2]) / 2, p.chatter_vibration_held);
+  // No other rule reads it: the tone holds its size, q does not grow.
+  EdgeParameters off = p;
+  off.chatter_vibration_held = EdgeParameters::kNoHeld;
+  std::vector<double> ignored;
+  EXPECT_EQ(run(off, whole, &ignored), -1);
+  // With the cutter never wholly in the part, or where the drive cannot
+  // tell: the same q, not judged by the level.
+  ignored.clear();
+  EXPECT_EQ(run(
+                p, [](int) { return 0.95; }, &ignored),
+            -1)
+      << "never wholly in the part";
+  ignored.clear();
+  EXPECT_EQ(run(
+                p, [](int) { return std::nan(""); }, &ignored),
+            -1)
+      << "unknown engagement";
+  // Nor while the cutter crosses an aborted pass's ledge, where the step in
+  // the depth and the controller's answer to it change the cut.
+  ignored.clear();
+  EXPECT_EQ(run(p, whole, &ignored, true), -1) << "crossing a ledge";
+  // One revolution's jump is no hold: a tone three times the size for one
+  // revolution takes the mean of the two past `held`, but the revolution
+  // before it read below `held_floor` (the other rules are what judge a
+  // jump).
+  std::vector<double> jump;
+  EXPECT_NE(run(p, whole, &jump, false, 40), 0);
+  ASSERT_GE(jump.size(), 1u);
+  EXPECT_GT(jump[0], 0.25) << "the jump's revolution";
+  EdgeParameters no_floor = p;
+  no_floor.chatter_vibration_held_floor = 0;
+  ignored.clear();
+  EXPECT_EQ(run(no_floor, whole, &ignored, false, 40), 0) << "without the floor, it would be";
+  // Wholly in the part from the end of the tone's first revolution on: its
+  // second starts at 0.95, so the first pair wholly in the part is the third
+  // and fourth, a revolution later.
+  ignored.clear();
+  EXPECT_EQ(run(
+                p, [](int r) { return r < 1 ? 0.95 : 1.0; }, &ignored),
+            3);
 }
 
 // Entering the part, the cut's pattern grows from one revolution to the next,

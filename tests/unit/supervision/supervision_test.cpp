@@ -257,6 +257,9 @@ TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
            p.chatter_vibration_climb == 0.15 && p.chatter_vibration_growth == 1.0 &&
            p.chatter_vibration_flip_revolutions == 3;
   };
+  // The held rule from 10 kHz only.
+  auto held = [](const sv::Parameters& p) { return p.chatter_vibration_held == 0.15; };
+  EXPECT_FALSE(held(loop));
   EXPECT_FALSE(fine_rules(loop));
   cfg.mutable_operation()->set_sample_period_s(0.0004);  // one of 0.4 ms: 2.5 kHz
   EXPECT_FALSE(fine_rules(sv::parameters_from_config(cfg)));
@@ -265,13 +268,17 @@ TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
   const auto four = sv::parameters_from_config(cfg);
   EXPECT_EQ(sv::vibration_channel_rate_hz(four), 4000);
   EXPECT_TRUE(fine_rules(four));
+  EXPECT_FALSE(held(four)) << "no held rule at 4 kHz";
+  EXPECT_EQ(four.chatter_vibration_held, sv::Parameters::kNoHeld);
   EXPECT_TRUE(four.chatter_vibration_keep_across_steps);
   cfg.mutable_operation()->set_wideband_samples_per_tick(4);  // 8 kHz
   EXPECT_TRUE(fine_rules(sv::parameters_from_config(cfg)));
+  EXPECT_FALSE(held(sv::parameters_from_config(cfg)));
   cfg.mutable_operation()->set_wideband_samples_per_tick(5);  // 10 kHz
   const auto fine = sv::parameters_from_config(cfg);
   EXPECT_EQ(sv::vibration_channel_rate_hz(fine), 10000);
   EXPECT_TRUE(fine_rules(fine));
+  EXPECT_TRUE(held(fine));
   EXPECT_EQ(fine.chatter_vibration_jump, defaults.chatter_vibration_jump);
   EXPECT_EQ(fine.chatter_vibration_flip, defaults.chatter_vibration_flip);
   EXPECT_EQ(fine.chatter_vibration_backup, defaults.chatter_vibration_backup);
@@ -283,11 +290,13 @@ TEST(Parameters, TheVibrationRulesFollowTheWidebandChannelsRate) {
   const auto also_fine = sv::parameters_from_config(cfg);
   EXPECT_NEAR(sv::vibration_channel_rate_hz(also_fine), 10000, 1e-6);
   EXPECT_TRUE(fine_rules(also_fine));
+  EXPECT_TRUE(held(also_fine));
   // And back: a set applied for a slower channel restores the loop's rules.
   auto p = fine;
   sv::set_vibration_rules_for_channel(p, 2000);
   EXPECT_FALSE(fine_rules(p));
   EXPECT_EQ(p.chatter_vibration_rise, defaults.chatter_vibration_rise);
+  EXPECT_EQ(p.chatter_vibration_held, sv::Parameters::kNoHeld) << "no level rule at 2 kHz";
   EXPECT_EQ(p.chatter_vibration_growth, defaults.chatter_vibration_growth);
   EXPECT_FALSE(p.chatter_vibration_keep_across_steps);
 }

@@ -102,7 +102,8 @@ class OperatorChatterDetector final : public Module {
 // Parameters::chatter_vibration_* (q rising past `rise`, or past `climb`
 // for longer, or past `pause` with a revolution's pause, or above `net`
 // three times while growing by half, or jumping past `jump` and held there
-// a revolution; q above `level`; the estimate's share at the spindle
+// a revolution; q above `level`; q above `held` over two revolutions with
+// the cutter wholly in the part; the estimate's share at the spindle
 // orders halfway between tooth harmonics, a period doubling, above `flip`;
 // or S above `backup`, where it is on), both energies less the channel's expected noise
 // (Parameters::vibration_sensor_noise_rms_n); without the channel,
@@ -163,6 +164,9 @@ class AutomaticChatterDetector final : public Module {
   double most_engaged_ = 0;     // and the most it reached since it last rose
   static constexpr double kMaxMeanChange = 0.1;
   static constexpr int kVibrationConfirm = 3;  // `level` and `backup`: revolutions in a row
+  // The drive's engagement that counts as the cutter wholly in the part
+  // (`held`): the detector study's labelling reads 1 there to 0.1 %.
+  static constexpr double kWholeEngagement = 0.999;
 
   // The vibration estimate: per y mode its exact zero-order-hold
   // discretisation at the wideband channel's sample period and its state
@@ -201,7 +205,8 @@ class AutomaticChatterDetector final : public Module {
   double q1_ = 0, q2_ = 0, q3_ = 0;  // q of the last three judged revolutions (NaN: none)
   double s1_ = 0, s2_ = 0;           // S of the last two of them (NaN: none, or S not judged)
   int q_above_ = 0;                  // judged revolutions in a row with q above `level`
-  int flip_above_ = 0;               // and with the period doubling's share above `flip`
+  bool whole1_ = false;  // the last judged revolution was cut with the cutter wholly in the part
+  int flip_above_ = 0;   // and with the period doubling's share above `flip`
   // Of the revolution vibration_ratio() last read: the estimate's share of
   // its AC energy at the spindle orders halfway between tooth harmonics (a
   // period doubling; 0 with an odd number of teeth, or none read), the

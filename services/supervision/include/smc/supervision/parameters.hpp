@@ -147,7 +147,12 @@ struct Parameters {
   // fall back before a second rise above `rise`), or so only to past
   // `confirmed` where F_z's non-harmonic share rose too, by more than
   // `confirmed_growth` x in each of the last two (the two channels' evidence
-  // together); or exceeds `level` in three in a row; or when the estimated
+  // together); or exceeds `level` in three in a row; or exceeds `held` on
+  // average over two judged revolutions in a row, neither below
+  // `held_floor`, both with the cutter wholly in the part (the drive's
+  // engagement 1 at each end of both) and off an aborted pass's ledge (on
+  // with a channel from kHeldRuleChannelRateHz, 10 kHz; off, kNoHeld, below
+  // it); or when the estimated
   // vibration's share at the spindle orders halfway between tooth harmonics
   // exceeds `flip` in `flip_revolutions` in a row (a period doubling, with an even number of
   // teeth, repeats every revolution: q sees it only while it grows); or, where
@@ -172,6 +177,9 @@ struct Parameters {
   double chatter_vibration_confirmed = 0.18;
   double chatter_vibration_confirmed_growth = 1.2;
   double chatter_vibration_level = 0.8;
+  static constexpr double kNoHeld = 1e9;  // above any q: the held rule is off
+  double chatter_vibration_held = kNoHeld;
+  double chatter_vibration_held_floor = 0.14;
   double chatter_vibration_flip = 0.5;
   int chatter_vibration_flip_revolutions = 2;
   static constexpr double kNoBackup = 2;  // above any share: the backup is off
@@ -211,6 +219,12 @@ struct Parameters {
 // against 1 and 112) and on the mismatched mill (edge/CHATTER.md, "What the
 // channel's filter costs E"). 6 and 8 kHz were not measured.
 inline constexpr double kFineChannelRateHz = 4000;
+// The rate from which the held rule is on (chatter_vibration_held): 10 kHz,
+// where E reads the mill's q within 1-3 %. At 4 kHz it caught one more cut
+// within 3 revolutions off the study's grid and made one false detection,
+// a cut whose q hovered at 0.147 before its onset (edge/CHATTER.md, "The
+// held rule").
+inline constexpr double kHeldRuleChannelRateHz = 10000;
 // The channel's rate of `p` (vibration_samples_per_tick / sample_period_s).
 double vibration_channel_rate_hz(const Parameters& p) noexcept;
 // Sets module E's vibration rules to the set chosen for a channel at
