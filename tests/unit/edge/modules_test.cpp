@@ -913,16 +913,12 @@ TEST(AutomaticChatterDetector, QHeldAboveTheThresholdInTheWholeCutIsChatter) {
   EXPECT_EQ(run(off, whole, &ignored), -1);
   // With the cutter never wholly in the part, or where the drive cannot
   // tell: the same q, not judged by the level.
+  auto partly = [](int) { return 0.95; };
+  auto unknown = [](int) { return std::nan(""); };
   ignored.clear();
-  EXPECT_EQ(run(
-                p, [](int) { return 0.95; }, &ignored),
-            -1)
-      << "never wholly in the part";
+  EXPECT_EQ(run(p, partly, &ignored), -1) << "never wholly in the part";
   ignored.clear();
-  EXPECT_EQ(run(
-                p, [](int) { return std::nan(""); }, &ignored),
-            -1)
-      << "unknown engagement";
+  EXPECT_EQ(run(p, unknown, &ignored), -1) << "unknown engagement";
   // Nor while the cutter crosses an aborted pass's ledge, where the step in
   // the depth and the controller's answer to it change the cut.
   ignored.clear();
@@ -939,13 +935,12 @@ TEST(AutomaticChatterDetector, QHeldAboveTheThresholdInTheWholeCutIsChatter) {
   no_floor.chatter_vibration_held_floor = 0;
   ignored.clear();
   EXPECT_EQ(run(no_floor, whole, &ignored, false, 40), 0) << "without the floor, it would be";
-  // Wholly in the part from the end of the tone's first revolution on: its
-  // second starts at 0.95, so the first pair wholly in the part is the third
-  // and fourth, a revolution later.
+  // The engagement reaching 1 at the end of the tone's second revolution:
+  // that revolution started at 0.95, so the first pair wholly in the part
+  // is the third and fourth, and the rule fires a revolution later.
+  auto entering = [](int r) { return r < 1 ? 0.95 : 1.0; };
   ignored.clear();
-  EXPECT_EQ(run(
-                p, [](int r) { return r < 1 ? 0.95 : 1.0; }, &ignored),
-            3);
+  EXPECT_EQ(run(p, entering, &ignored), 3);
 }
 
 // Entering the part, the cut's pattern grows from one revolution to the next,
