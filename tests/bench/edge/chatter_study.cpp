@@ -323,7 +323,7 @@ int main(int argc, char** argv) {
        "q above this in 3 revolutions is chatter"},
       {"--vibration-held", &EdgeParameters::chatter_vibration_held,
        "q above this on average over 2 revolutions, the cutter wholly in the part, is chatter "
-       "(above 2: off)"},
+       "(1e9: off)"},
       {"--vibration-held-floor", &EdgeParameters::chatter_vibration_held_floor,
        "the held rule's floor: neither revolution below it"},
       {"--vibration-flip", &EdgeParameters::chatter_vibration_flip,
@@ -394,8 +394,9 @@ int main(int argc, char** argv) {
       ->check(smc::bench::kPositive);
   // E's rules follow the channel's rate: the set chosen at 10 kHz (the
   // configuration's) and the one chosen at the loop's 2 kHz.
+  constexpr double kShippedChannelRateHz = 10000;  // 5 samples a 0.5 ms period
   EdgeParameters shipped;
-  smc::supervision::set_vibration_rules_for_channel(shipped, smc::supervision::kFineChannelRateHz);
+  smc::supervision::set_vibration_rules_for_channel(shipped, kShippedChannelRateHz);
   const EdgeParameters at_loop;
   for (Knob& k : knobs) {
     char help[200];
@@ -406,7 +407,7 @@ int main(int argc, char** argv) {
     } else if (shipped.*k.field == at_loop.*k.field) {
       std::snprintf(help, sizeof help, "%s (shipped: %g)", k.what, shipped.*k.field);
     } else if (k.field == &EdgeParameters::chatter_vibration_held) {
-      std::snprintf(help, sizeof help, "%s (shipped: %g at 10 kHz, off at 2 kHz)", k.what,
+      std::snprintf(help, sizeof help, "%s (shipped: %g at 10 kHz, off below it)", k.what,
                     shipped.*k.field);
     } else {
       std::snprintf(help, sizeof help, "%s (shipped: %g at 10 kHz, %g at 2 kHz)", k.what,
@@ -585,7 +586,7 @@ int main(int argc, char** argv) {
                     shown.chatter_vibration_backup);
     }
     char held_text[128] = "";
-    if (shown.chatter_vibration_held <= 2) {
+    if (shown.chatter_vibration_held < EdgeParameters::kNoHeld) {
       std::snprintf(held_text, sizeof held_text,
                     ", or exceeds %.3f on average over 2, neither below %.3f, with the cutter "
                     "wholly in the part",
