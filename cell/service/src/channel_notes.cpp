@@ -7,6 +7,13 @@
 
 namespace smc::cell {
 
+void add_milling_structures(const std::vector<store::ProcessModel>& models,
+                            std::vector<StructureOf>& out) {
+  for (const auto& m : models) {
+    if (m.kind == store::ModelKind::kMilling) out.push_back({m.id, &m.milling.structure()});
+  }
+}
+
 std::vector<ChannelNote> channel_notes(const store::WidebandChannel& channel,
                                        const std::vector<StructureOf>& structures) {
   std::vector<ChannelNote> notes;
@@ -26,9 +33,7 @@ std::vector<ChannelNote> channel_notes(store::Store& db, const store::Machine& m
   if (machine.wideband.is_default()) return {};
   const auto models = db.find_models(machine.id, "", "", "");
   std::vector<StructureOf> structures;
-  for (const auto& m : models) {
-    if (m.kind == store::ModelKind::kMilling) structures.push_back({m.id, &m.milling.structure()});
-  }
+  add_milling_structures(models, structures);
   return channel_notes(machine.wideband, structures);
 }
 

@@ -97,10 +97,7 @@ std::vector<std::string> channel_notes(store::Store& s, const store::CatalogDocu
     if (w.is_default()) continue;
     std::vector<smc::cell::StructureOf> structures;
     const auto stored = s.find_models(d.id(), "", "", "");
-    for (const auto& m : stored) {
-      if (m.kind == store::ModelKind::kMilling)
-        structures.push_back({m.id, &m.milling.structure()});
-    }
+    smc::cell::add_milling_structures(stored, structures);
     for (const auto& m : docs.models) {
       if (m.doc.machine_id() == d.id() && m.doc.has_milling()) {
         structures.push_back({m.doc.id(), &m.doc.milling().structure()});

@@ -29,6 +29,11 @@ struct ChannelNote {
   std::string text;      // the warning, with its fix
 };
 
+// Appends the structures of the milling models among `models` (which must
+// outlive `out`: it points into them).
+void add_milling_structures(const std::vector<store::ProcessModel>& models,
+                            std::vector<StructureOf>& out);
+
 // The channel against each structure, one note per distinct text. None for
 // the cell's default channel (samples_per_tick 0).
 std::vector<ChannelNote> channel_notes(const store::WidebandChannel& channel,
