@@ -136,6 +136,7 @@
 #include <vector>
 
 #include "chatter_plots.hpp"
+#include "label_rule.hpp"
 #include "smc/documents/load.hpp"
 #include "smc/edge/core.hpp"
 #include "smc/edge/runner.hpp"
@@ -146,6 +147,12 @@
 #include "study_grid.hpp"
 
 using namespace smc::edge;
+using smc::bench::failed;
+using smc::bench::label_rule_outcome;
+using smc::bench::LabelledCut;
+using smc::bench::Outcome;
+using smc::bench::passed_onset_level;
+using smc::bench::same_failure;
 
 namespace {
 
@@ -185,21 +192,6 @@ std::string q_list(const std::vector<double>& qs) {
   return out;
 }
 
-// A decision before the label's onset is chatter the label has not called
-// yet when the mill's own q, or its period doubling's share, passed the
-// onset's threshold in the revolution decided on or the three before it (as
-// many as E's rules look at); otherwise it is a false detection, though the
-// cut chatters later.
-bool passed_onset_level(const std::vector<RevolutionChange>& changes, size_t at) {
-  for (size_t r = at >= 3 ? at - 3 : 0; r <= at && r < changes.size(); ++r) {
-    if (changes[r].comparable &&
-        (changes[r].q > kChatterOnsetQ || changes[r].flip > kChatterOnsetFlip)) {
-      return true;
-    }
-  }
-  return false;
-}
-
 // An unstable cut E detected before the label's onset, with the mill's own
 // q (the labelling run's) from three revolutions before E's detection to
 // the one after: was the cut already changing when E decided?
@@ -212,32 +204,6 @@ struct EarlyCut {
   bool premature = false;        // !passed_onset_level: a false detection
 };
 
-// How a detector's first decision on a cut counts against the label: no
-// decision in a stable cut; a false detection (in a stable cut, or before
-// an unstable cut's onset on q that had not reached it); an unstable cut
-// within 3 revolutions, late, or missed.
-enum class Outcome { kQuiet, kFalse, kWithin3, kLate, kMissed };
-bool failed(Outcome o) {
-  return o == Outcome::kFalse || o == Outcome::kLate || o == Outcome::kMissed;
-}
-// The same kind of failure: a false detection, or an unstable cut not
-// within 3 revolutions (late or missed).
-bool same_failure(Outcome a, Outcome b) {
-  return a == Outcome::kFalse ? b == Outcome::kFalse
-                              : failed(a) && failed(b) && b != Outcome::kFalse;
-}
-
-// A cut's labelling run, revolution by revolution (the mill's own q), kept
-// to run the label's own rule again on q read with an error, with how E's
-// first decision on the cut counted.
-struct LabelledCut {
-  double rpm = 0, width = 0, runout = 0, fraction = 0, onset_s = -1;
-  int seed = 0;
-  std::vector<RevolutionChange> changes;
-  std::vector<double> end_s;  // each revolution's last sample
-  Outcome e = Outcome::kQuiet;
-};
-
 // The label's own rule run as a detector on each cut's q read with a
 // relative error drawn per revolution (Gaussian, sigma): what it decides,
 // counted as E's decisions are. It decides at the end of the revolution
@@ -245,44 +211,6 @@ struct LabelledCut {
 struct RuleOnError {
   int false_detections = 0, detected = 0, within3 = 0;
 };
-// The label's rule on one cut's q (and share) read with an error drawn
-// from `rng`, counted against the label on the exact q.
-Outcome label_rule_outcome(const LabelledCut& cut, std::mt19937_64& rng,
-                           std::normal_distribution<double>& error,
-                           std::vector<RevolutionChange>& read) {
-  read = cut.changes;
-  for (RevolutionChange& c : read) {
-    c.q *= 1 + error(rng);
-    c.flip *= 1 + error(rng);
-  }
-  mark_onsets(read);
-  double decided = -1;
-  size_t decided_at = 0;
-  for (size_t r = 0; r + 1 < read.size(); ++r) {
-    if (!read[r].onset()) continue;
-    // A rise confirmed by the next revolution or after a pause; a period
-    // doubling by the two after it (or fewer, up to a reaction).
-    if (read[r].onset_level > kChatterOnsetQ) {
-      const bool grew = !read[r + 1].comparable || read[r + 1].q > read[r].q;
-      decided_at = grew || r + 2 >= read.size() ? r + 1 : r + 2;
-    } else {
-      decided_at = r;
-      while (decided_at < r + 2 && decided_at + 1 < read.size() &&
-             read[decided_at + 1].comparable) {
-        ++decided_at;
-      }
-    }
-    decided = cut.end_s[decided_at];
-    break;
-  }
-  if (cut.onset_s < 0) return decided >= 0 ? Outcome::kFalse : Outcome::kQuiet;
-  if (decided < 0) return Outcome::kMissed;
-  if (decided < cut.onset_s - 1e-9 && !passed_onset_level(cut.changes, decided_at)) {
-    return Outcome::kFalse;  // before the onset, on q that had not reached it
-  }
-  return (decided - cut.onset_s) * cut.rpm / 60.0 <= 3.0 ? Outcome::kWithin3 : Outcome::kLate;
-}
-
 RuleOnError label_rule_on_error(const std::vector<LabelledCut>& cuts, double sigma, unsigned draw) {
   std::mt19937_64 rng(draw);
   std::normal_distribution<double> error(0.0, sigma);
