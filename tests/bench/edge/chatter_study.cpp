@@ -721,7 +721,8 @@ int main(int argc, char** argv) {
             const double onset =
                 twin_label ? first_onset_s(labelled, changes) : label.chatter_onset_s();
             const double first_detection = s.chatter_detected_s();
-            bool premature = false;  // before the onset: a false detection
+            bool premature = false;             // before the onset: a false detection
+            Outcome outcome = Outcome::kQuiet;  // E's first decision, as the tables count it
             ++run_id;
             {
               LabelledCut& kept = labelled_cuts.emplace_back();
@@ -828,16 +829,16 @@ int main(int argc, char** argv) {
                                                      : std::numeric_limits<double>::quiet_NaN();
                 fc.level = cut_level;
                 fc.by_flip = by_flip;
-                // E's first decision, counted as the tables count it.
                 if (!fc.unstable) {
-                  kept.e = first_detection >= 0 ? Outcome::kFalse : Outcome::kQuiet;
+                  outcome = first_detection >= 0 ? Outcome::kFalse : Outcome::kQuiet;
                 } else if (premature) {
-                  kept.e = Outcome::kFalse;
+                  outcome = Outcome::kFalse;
                 } else if (first_detection < 0) {
-                  kept.e = Outcome::kMissed;
+                  outcome = Outcome::kMissed;
                 } else {
-                  kept.e = fc.delay_revs <= 3.0 ? Outcome::kWithin3 : Outcome::kLate;
+                  outcome = fc.delay_revs <= 3.0 ? Outcome::kWithin3 : Outcome::kLate;
                 }
+                kept.e = outcome;
               }
               // E's revolutions end on the trace's (both count the same
               // clock): pair each with the trace's that ends there, for the
@@ -970,17 +971,17 @@ int main(int argc, char** argv) {
               c.exceed += exceed;
               c.stable_max = std::max(c.stable_max, max_ratio);
               c.stable_max_q = std::max(c.stable_max_q, max_q);
-              c.false_detections += first_detection >= 0 ? 1 : 0;
+              c.false_detections += outcome == Outcome::kFalse ? 1 : 0;
             } else {
               ++c.unstable_runs;
-              if (premature) {
+              if (outcome == Outcome::kFalse) {
                 ++c.false_detections;
                 ++c.premature;
-              } else if (first_detection >= 0) {
+              } else if (outcome != Outcome::kMissed) {
                 ++c.detected;
                 const double delay = (first_detection - onset) * rpm / 60.0;
                 c.worst_delay_revs = std::max(c.worst_delay_revs, delay);
-                if (delay <= 3.0) ++c.within3;
+                c.within3 += outcome == Outcome::kWithin3 ? 1 : 0;
                 c.unstable_min_peak = std::min(c.unstable_min_peak, max_ratio);
               }
             }
@@ -1190,8 +1191,9 @@ int main(int argc, char** argv) {
           (is_false ? false_same : late_same) += same ? 1 : 0;
           if (!same && sigma == kListedSigma) unexplained.push_back(&failure);
         }
-        std::printf(" at %.1f %%, %d of %d false detections and %d of %d late or missed;",
-                    100 * sigma, false_same, false_all, late_same, late_all);
+        std::printf("%s at %.1f %%, %d of %d false detections and %d of %d late or missed",
+                    sigma == kSigmas[0] ? "" : ";", 100 * sigma, false_same, false_all, late_same,
+                    late_all);
       }
       std::printf("\n");
       for (const LabelledCut* u : unexplained) {
