@@ -476,7 +476,7 @@ class LinuxCncCell : public ::testing::Test {
                                             watch_file()});
     edge_.emplace(std::vector<std::string>{
         src("deploy/linuxcnc/run.sh"), "exec", "env", "CYCLONEDDS_URI=" + uri_, bin("smc-edge"),
-        "--log-level", "warn", "run", "--machine", "mill-1", "--drive", "linuxcnc", "--partition",
+        "--log-level", "info", "run", "--machine", "mill-1", "--drive", "linuxcnc", "--partition",
         partition_, "--lease-ms", "1000", "--no-realtime", "--program-dir",
         (dir_ / "programs").string()});
   }
@@ -496,7 +496,13 @@ class LinuxCncCell : public ::testing::Test {
           capture(src("deploy/linuxcnc/run.sh") + " stop --dir " + (dir_ / "cnc").string(), &st);
       EXPECT_EQ(st, 0) << out;
     }
-    std::filesystem::remove_all(dir_);
+    // A failed run keeps its folder (LinuxCNC's logs under cnc/, the
+    // watch's status rows, the programs handed over) for whoever reads it.
+    if (HasFailure()) {
+      std::fprintf(stderr, "the run's folder is kept: %s\n", dir_.c_str());
+    } else {
+      std::filesystem::remove_all(dir_);
+    }
   }
 
   static std::string bin(const std::string& name) { return smc::test::bin_path(name); }

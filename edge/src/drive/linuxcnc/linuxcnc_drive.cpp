@@ -281,6 +281,26 @@ void LinuxCncDrive::Impl::control_loop() {
   int handled = 0;
   int speed_handled = 0;
   int idle_polls = 0;
+  // The axis must stand still before a rewrite is handed over or a broken
+  // tool is lifted. The loop holds the feed; an axis still moving 10 s
+  // later is a fault with its velocity, not a job that waits for ever.
+  std::chrono::steady_clock::time_point moving_since{};
+  auto standing = [&](const linuxcnc::CncStatus& st, const char* what) {
+    if (std::fabs(st.velocity_mm_s) <= 1e-3) {
+      moving_since = {};
+      return true;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (moving_since == std::chrono::steady_clock::time_point{}) moving_since = now;
+    if (now - moving_since > 10s) {
+      char words[200];
+      std::snprintf(words, sizeof words,
+                    "the axis still moved at %.3f mm/s 10 s after the feed was held for %s",
+                    st.velocity_mm_s, what);
+      set_fault(CncFault::kLinuxCnc, words);
+    }
+    return false;
+  };
   // A lift asked for is finished even when the drive is being destroyed
   // (the run ends a second after a breakage): the tool is not left in the
   // part half-way up. Each LinuxCNC command is bounded by its timeout.
@@ -324,7 +344,7 @@ void LinuxCncDrive::Impl::control_loop() {
     }
     if (retract_asked.load(std::memory_order_acquire)) {
       // A safe point: the feed is held by the loop; wait for standstill.
-      if (std::fabs(st.velocity_mm_s) > 1e-3) continue;
+      if (!standing(st, "the broken tool's lift")) continue;
       lift();  // the thread's last act
       return;
     }
@@ -344,7 +364,7 @@ void LinuxCncDrive::Impl::control_loop() {
     const int asked = rewrite_asked.load(std::memory_order_acquire);
     if (asked != handled) {
       // A safe point: the feed is held by the loop; wait for standstill.
-      if (std::fabs(st.velocity_mm_s) > 1e-3) continue;
+      if (!standing(st, "the rewritten program's hand-over")) continue;
       try {
         // The tool stands in the cut. LinuxCNC's abort also stops the
         // spindle; the remainder's first move lifts the tool only once it
