@@ -27,6 +27,12 @@ namespace smc::edge {
 
 namespace {
 
+// The axis stands still: what a rewrite's hand-over, a broken tool's lift
+// and an MDI move's end each wait for.
+bool at_standstill(const linuxcnc::CncStatus& st) noexcept {
+  return std::fabs(st.velocity_mm_s) <= 1e-3;
+}
+
 std::int64_t now_ns() noexcept {
   timespec t{};
   clock_gettime(CLOCK_MONOTONIC, &t);
@@ -286,7 +292,7 @@ void LinuxCncDrive::Impl::control_loop() {
   // later is a fault with its velocity, not a job that waits for ever.
   std::chrono::steady_clock::time_point moving_since{};
   auto standing = [&](const linuxcnc::CncStatus& st, const char* what) {
-    if (std::fabs(st.velocity_mm_s) <= 1e-3) {
+    if (at_standstill(st)) {
       moving_since = {};
       return true;
     }
@@ -427,7 +433,7 @@ void LinuxCncDrive::Impl::mdi_move(const std::string& line) {
       for (const auto& m : cnc->take_errors()) {
         throw std::runtime_error("LinuxCNC: " + m);
       }
-      still = now.interp_idle && std::fabs(now.velocity_mm_s) < 1e-3 ? still + 1 : 0;
+      still = now.interp_idle && at_standstill(now) ? still + 1 : 0;
       if (still >= 3) {
         retract_moving.store(false, std::memory_order_release);
         return;
